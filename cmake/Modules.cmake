@@ -21,15 +21,12 @@ function(chlorovdb_module name)
   endif()
 endfunction()
 
-# chlorovdb_test(NAME LIBS <targets...>)
-#   Builds tests/NAME/*.cpp into one GoogleTest binary test_NAME and registers
+# chlorovdb_test(NAME LIBS <targets...> [LABELS ...])
+#   Called from tests/NAME/CMakeLists.txt. Builds tests/NAME/*.cpp into one GoogleTest binary test_NAME and registers
 #   each test case with CTest. Statistical tests take their seeds from the code.
 function(chlorovdb_test name)
   cmake_parse_arguments(ARG "" "" "LIBS;LABELS" ${ARGN})
-  file(GLOB sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/${name}/*.cpp)
-  if(NOT sources)
-    return()
-  endif()
+  file(GLOB sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*.cpp)
   add_executable(test_${name} ${sources})
   target_link_libraries(test_${name} PRIVATE ${ARG_LIBS} GTest::gtest GTest::gtest_main)
   target_compile_definitions(test_${name} PRIVATE
