@@ -1,0 +1,271 @@
+#include "geometry/mesh.h"
+
+#include <assimp/Importer.hpp>
+#include <assimp/config.h>
+#include <assimp/postprocess.h>
+#include <assimp/scene.h>
+#include <fmt/format.h>
+
+#include <array>
+#include <cmath>
+#include <cstring>
+#include <unordered_map>
+
+#include "core/constants.h"
+#include "core/error.h"
+
+namespace chlorovdb {
+namespace {
+
+Vec3 triangle_cross(const TriangleMesh& mesh, int tri) {
+  const Vec3& p0 = mesh.positions[mesh.indices[3 * tri]];
+  const Vec3& p1 = mesh.positions[mesh.indices[3 * tri + 1]];
+  const Vec3& p2 = mesh.positions[mesh.indices[3 * tri + 2]];
+  return cross(p1 - p0, p2 - p0);
+}
+
+// A triangle is degenerate when its area is at float-rounding level relative to
+// its longest edge (|e0 x e1| <= 1e-6 * longest²): its normal is then noise.
+bool is_degenerate(const TriangleMesh& mesh, int tri) {
+  const uint32_t i0 = mesh.indices[3 * tri], i1 = mesh.indices[3 * tri + 1], i2 = mesh.indices[3 * tri + 2];
+  if (i0 == i1 || i1 == i2 || i2 == i0) return true;
+  const Vec3 &p0 = mesh.positions[i0], &p1 = mesh.positions[i1], &p2 = mesh.positions[i2];
+  const float longest_sq =
+      std::max({length_squared(p1 - p0), length_squared(p2 - p1), length_squared(p0 - p2)});
+  const float area2 = length(cross(p1 - p0, p2 - p0));
+  return !(area2 > 1e-6f * longest_sq);  // also catches NaN
+}
+
+// Shading normals that are zero or non-finite are replaced by the area-weighted
+// average of the adjacent faces' geometric normals; returns how many were.
+int repair_normals(TriangleMesh& mesh) {
+  std::vector<uint8_t> bad(mesh.normals.size(), 0);
+  int repaired = 0;
+  for (size_t i = 0; i < mesh.normals.size(); ++i) {
+    const float len = length(mesh.normals[i]);
+    if (std::isfinite(len) && len > 0.f) {
+      mesh.normals[i] = mesh.normals[i] / len;
+    } else {
+      bad[i] = 1;
+      mesh.normals[i] = Vec3(0.f);
+      ++repaired;
+    }
+  }
+  if (repaired == 0) return 0;
+  for (int t = 0; t < mesh.triangle_count(); ++t) {
+    const Vec3 area_normal = triangle_cross(mesh, t);
+    for (int k = 0; k < 3; ++k)
+      if (bad[mesh.indices[3 * t + k]]) mesh.normals[mesh.indices[3 * t + k]] += area_normal;
+  }
+  for (size_t i = 0; i < mesh.normals.size(); ++i)
+    if (bad[i]) {
+      const float len = length(mesh.normals[i]);
+      mesh.normals[i] = len > 0.f ? mesh.normals[i] / len : Vec3(0.f, 0.f, 1.f);  // unreferenced vertex
+    }
+  return repaired;
+}
+
+}  // namespace
+
+TriangleMesh load_mesh(const std::filesystem::path& file, MeshLoadInfo* info) {
+  const std::string name = file.string();
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(file, ec)) throw InputError(name, "", "", "mesh file not found or not a file");
+
+  Assimp::Importer importer;
+  // Points and lines cannot bound anything: drop them instead of failing.
+  importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
+  const unsigned flags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_PreTransformVertices |
+                         aiProcess_SortByPType | aiProcess_ValidateDataStructure;
+  const aiScene* scene = importer.ReadFile(name, flags);
+  if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE))
+    throw InputError(name, "", "", fmt::format("cannot read mesh: {}", importer.GetErrorString()));
+
+  bool all_normals = scene->mNumMeshes > 0, all_uvs = scene->mNumMeshes > 0;
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+    all_normals = all_normals && scene->mMeshes[m]->HasNormals();
+    all_uvs = all_uvs && scene->mMeshes[m]->HasTextureCoords(0);
+  }
+
+  TriangleMesh mesh;
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m) {
+    const aiMesh* am = scene->mMeshes[m];
+    const uint32_t base = uint32_t(mesh.positions.size());
+    for (unsigned v = 0; v < am->mNumVertices; ++v) {
+      const aiVector3D& p = am->mVertices[v];
+      mesh.positions.push_back({p.x, p.y, p.z});
+      if (all_normals) mesh.normals.push_back({am->mNormals[v].x, am->mNormals[v].y, am->mNormals[v].z});
+      if (all_uvs) mesh.uvs.push_back({am->mTextureCoords[0][v].x, am->mTextureCoords[0][v].y});
+    }
+    for (unsigned f = 0; f < am->mNumFaces; ++f) {
+      const aiFace& face = am->mFaces[f];
+      if (face.mNumIndices != 3) continue;  // SortByPType already removed points and lines
+      for (int k = 0; k < 3; ++k) mesh.indices.push_back(base + face.mIndices[k]);
+    }
+  }
+
+  if (mesh.indices.empty()) throw InputError(name, "", "", "mesh has no triangles");
+  for (size_t v = 0; v < mesh.positions.size(); ++v)
+    if (!is_finite(mesh.positions[v]))
+      throw InputError(name, "", "", fmt::format("vertex {} has a non-finite coordinate (NaN or Inf)", v));
+
+  const int triangles_in_file = mesh.triangle_count();
+  const int dropped = drop_degenerate_triangles(mesh);
+  if (mesh.indices.empty())
+    throw InputError(name, "", "", fmt::format("all {} triangles are degenerate (zero area)", triangles_in_file));
+  repair_normals(mesh);
+
+  if (info) {
+    info->degenerate_dropped = dropped;
+    info->source_meshes = int(scene->mNumMeshes);
+  }
+  return mesh;
+}
+
+int drop_degenerate_triangles(TriangleMesh& mesh) {
+  const int n = mesh.triangle_count();
+  size_t kept = 0;
+  for (int t = 0; t < n; ++t) {
+    if (is_degenerate(mesh, t)) continue;
+    for (int k = 0; k < 3; ++k) mesh.indices[kept + k] = mesh.indices[3 * t + k];
+    kept += 3;
+  }
+  mesh.indices.resize(kept);
+  return n - int(kept / 3);
+}
+
+TriangleMesh make_quad(Vec3 corner, Vec3 edge_u, Vec3 edge_v) {
+  TriangleMesh mesh;
+  const Vec3 n = normalize(cross(edge_u, edge_v));
+  mesh.positions = {corner, corner + edge_u, corner + edge_u + edge_v, corner + edge_v};
+  mesh.normals = {n, n, n, n};
+  mesh.uvs = {{0, 0}, {1, 0}, {1, 1}, {0, 1}};
+  mesh.indices = {0, 1, 2, 0, 2, 3};
+  return mesh;
+}
+
+TriangleMesh make_box(const Bounds3& box) {
+  const Vec3 lo = box.lo, d = box.diagonal();
+  const Vec3 ex{d.x, 0, 0}, ey{0, d.y, 0}, ez{0, 0, d.z};
+  // Each face as a quad whose cross(edge_u, edge_v) points outward.
+  const std::array<std::array<Vec3, 3>, 6> faces{{
+      {lo, ey, ex},            // -z
+      {lo + ez, ex, ey},       // +z
+      {lo, ex, ez},            // -y
+      {lo + ey, ez, ex},       // +y
+      {lo, ez, ey},            // -x
+      {lo + ex, ey, ez},       // +x
+  }};
+  TriangleMesh mesh;
+  for (const auto& f : faces) {
+    const TriangleMesh q = make_quad(f[0], f[1], f[2]);
+    const uint32_t base = uint32_t(mesh.positions.size());
+    mesh.positions.insert(mesh.positions.end(), q.positions.begin(), q.positions.end());
+    mesh.normals.insert(mesh.normals.end(), q.normals.begin(), q.normals.end());
+    mesh.uvs.insert(mesh.uvs.end(), q.uvs.begin(), q.uvs.end());
+    for (uint32_t i : q.indices) mesh.indices.push_back(base + i);
+  }
+  return mesh;
+}
+
+TriangleMesh make_disk(Vec3 center, Vec3 normal, float radius, int segments) {
+  const Frame frame = Frame::from_z(normalize(normal));
+  TriangleMesh mesh;
+  mesh.positions.push_back(center);
+  mesh.normals.push_back(frame.n);
+  mesh.uvs.push_back({0.5f, 0.5f});
+  for (int j = 0; j < segments; ++j) {
+    const float phi = 2.f * kPi * float(j) / float(segments);
+    const float c = std::cos(phi), s = std::sin(phi);
+    mesh.positions.push_back(center + radius * (c * frame.s + s * frame.t));
+    mesh.normals.push_back(frame.n);
+    mesh.uvs.push_back({0.5f + 0.5f * c, 0.5f + 0.5f * s});
+  }
+  // Frame is right-handed (s x t = n), so increasing phi winds CCW about n.
+  for (int j = 0; j < segments; ++j)
+    mesh.indices.insert(mesh.indices.end(), {0u, uint32_t(1 + j), uint32_t(1 + (j + 1) % segments)});
+  return mesh;
+}
+
+TriangleMesh make_uv_sphere(Vec3 center, float radius, int rings, int segments) {
+  TriangleMesh mesh;
+  const int cols = segments + 1;  // the seam column is duplicated so uvs do not wrap
+  for (int i = 0; i <= rings; ++i) {
+    const float theta = kPi * float(i) / float(rings);
+    // Exact poles so every pole vertex has the same position (is_closed welds by position).
+    const float sin_t = (i == 0 || i == rings) ? 0.f : std::sin(theta);
+    const float cos_t = i == 0 ? 1.f : (i == rings ? -1.f : std::cos(theta));
+    for (int j = 0; j <= segments; ++j) {
+      const float phi = 2.f * kPi * float(j % segments) / float(segments);  // seam: bit-identical to j = 0
+      const Vec3 n{sin_t * std::cos(phi), sin_t * std::sin(phi), cos_t};
+      mesh.positions.push_back(center + radius * n);
+      mesh.normals.push_back(n);
+      mesh.uvs.push_back({float(j) / float(segments), float(i) / float(rings)});
+    }
+  }
+  // (theta, phi, r) is right-handed, so (v00, v10, v11) winds CCW seen from outside.
+  for (int i = 0; i < rings; ++i)
+    for (int j = 0; j < segments; ++j) {
+      const uint32_t v00 = i * cols + j, v01 = v00 + 1, v10 = v00 + cols, v11 = v10 + 1;
+      if (i != 0) mesh.indices.insert(mesh.indices.end(), {v00, v11, v01});        // not at the north pole
+      if (i != rings - 1) mesh.indices.insert(mesh.indices.end(), {v00, v10, v11});  // not at the south pole
+    }
+  return mesh;
+}
+
+bool is_closed(const TriangleMesh& mesh) {
+  if (mesh.indices.empty()) return false;
+  // Weld vertices by exact position (+0 and -0 alike) so flat-shaded meshes,
+  // which split vertices along creases, are judged by their geometry.
+  struct Key {
+    std::array<uint32_t, 3> bits;
+    bool operator==(const Key&) const = default;
+  };
+  struct KeyHash {
+    size_t operator()(const Key& k) const {
+      return std::hash<uint64_t>()((uint64_t(k.bits[0]) << 32 | k.bits[1]) ^ (uint64_t(k.bits[2]) * 0x9e3779b97f4a7c15ULL));
+    }
+  };
+  std::unordered_map<Key, uint32_t, KeyHash> weld;
+  std::vector<uint32_t> id(mesh.positions.size());
+  for (size_t v = 0; v < mesh.positions.size(); ++v) {
+    Key k;
+    for (int a = 0; a < 3; ++a) {
+      const float c = mesh.positions[v][a] + 0.f;  // -0 + 0 = +0
+      std::memcpy(&k.bits[a], &c, sizeof(float));
+    }
+    id[v] = weld.emplace(k, uint32_t(weld.size())).first->second;
+  }
+  // Per undirected edge: how often it is traversed low->high and high->low.
+  std::unordered_map<uint64_t, std::array<int, 2>> edges;
+  for (int t = 0; t < mesh.triangle_count(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = id[mesh.indices[3 * t + k]], b = id[mesh.indices[3 * t + (k + 1) % 3]];
+      if (a == b) return false;  // collapsed edge: not a proper surface
+      const uint64_t key = uint64_t(std::min(a, b)) << 32 | std::max(a, b);
+      ++edges[key][a < b ? 0 : 1];
+    }
+  for (const auto& [key, count] : edges)
+    if (count[0] != 1 || count[1] != 1) return false;
+  return true;
+}
+
+float triangle_area(const TriangleMesh& mesh, int triangle) { return 0.5f * length(triangle_cross(mesh, triangle)); }
+
+float mesh_area(const TriangleMesh& mesh) {
+  double sum = 0;
+  for (int t = 0; t < mesh.triangle_count(); ++t) sum += triangle_area(mesh, t);
+  return float(sum);
+}
+
+TriangleMesh transform_mesh(TriangleMesh mesh, const Transform& world_from_object) {
+  for (Vec3& p : mesh.positions) p = world_from_object.point(p);
+  for (Vec3& n : mesh.normals) n = normalize(world_from_object.normal(n));
+  const Vec3 c0 = world_from_object.vector({1, 0, 0}), c1 = world_from_object.vector({0, 1, 0}),
+             c2 = world_from_object.vector({0, 0, 1});
+  if (dot(cross(c0, c1), c2) < 0.f)  // mirroring: keep cross(p1-p0, p2-p0) on the normals' side
+    for (size_t t = 0; t + 2 < mesh.indices.size(); t += 3) std::swap(mesh.indices[t + 1], mesh.indices[t + 2]);
+  return mesh;
+}
+
+}  // namespace chlorovdb

@@ -1,0 +1,223 @@
+#include <gtest/gtest.h>
+
+#include <array>
+#include <atomic>
+#include <cmath>
+#include <thread>
+
+#include "core/constants.h"
+#include "core/rng.h"
+#include "geometry/geometry_scene.h"
+
+using namespace chlorovdb;
+
+namespace {
+
+void expect_near(const Vec3& a, const Vec3& b, float tol) {
+  EXPECT_NEAR(a.x, b.x, tol);
+  EXPECT_NEAR(a.y, b.y, tol);
+  EXPECT_NEAR(a.z, b.z, tol);
+}
+
+}  // namespace
+
+TEST(GeometryScene, ShapeIdsAreDenseInInsertionOrder) {
+  GeometryScene scene;
+  EXPECT_EQ(scene.add_mesh(make_quad({-1, -1, 0}, {2, 0, 0}, {0, 2, 0})), 0);
+  EXPECT_EQ(scene.add_sphere({0, 0, 5}, 1.f), 1);
+  EXPECT_EQ(scene.add_mesh(make_box({{3, 3, 3}, {4, 4, 4}})), 2);
+  scene.commit();
+  EXPECT_EQ(scene.shape_count(), 3);
+  EXPECT_EQ(scene.intersect({{0, 0, -3}, {0, 0, 1}}, kInfinity)->shape_id, 0);
+  EXPECT_EQ(scene.intersect({{0, 0, 1}, {0, 0, 1}}, kInfinity)->shape_id, 1);
+  EXPECT_EQ(scene.intersect({{3.5f, 3.5f, 0}, {0, 0, 1}}, kInfinity)->shape_id, 2);
+  const Bounds3 b = scene.bounds();
+  expect_near(b.lo, {-1, -1, 0}, 0);
+  expect_near(b.hi, {4, 4, 6}, 0);
+}
+
+TEST(GeometryScene, QuadHitAtKnownDistance) {
+  GeometryScene scene;
+  scene.add_mesh(make_quad({-1, -1, 0}, {2, 0, 0}, {0, 2, 0}), Transform::translate({0, 0, 2}));
+  scene.commit();
+  const auto hit = scene.intersect({{0.25f, -0.5f, 7}, {0, 0, -1}}, kInfinity);
+  ASSERT_TRUE(hit);
+  EXPECT_FLOAT_EQ(hit->t, 5.f);
+  expect_near(hit->p, {0.25f, -0.5f, 2}, 1e-6f);
+  EXPECT_EQ(hit->ng, Vec3(0, 0, 1));
+  EXPECT_EQ(hit->ns, Vec3(0, 0, 1));
+  EXPECT_NEAR(hit->uv.x, 0.625f, 1e-6f);
+  EXPECT_NEAR(hit->uv.y, 0.25f, 1e-6f);
+  // From below: the normal stays as stored (not flipped toward the ray).
+  const auto below = scene.intersect({{0, 0, -1}, {0, 0, 1}}, kInfinity);
+  ASSERT_TRUE(below);
+  EXPECT_FLOAT_EQ(below->t, 3.f);
+  EXPECT_EQ(below->ng, Vec3(0, 0, 1));
+  EXPECT_FALSE(scene.intersect({{1.5f, 0, 7}, {0, 0, -1}}, kInfinity));
+  EXPECT_FALSE(scene.intersect({{0, 0, 7}, {0, 0, -1}}, 4.9f)) << "t_max must bound the search";
+}
+
+TEST(GeometryScene, BoxEnteringAndLeaving) {
+  GeometryScene scene;
+  scene.add_mesh(make_box({{-1, -1, -1}, {1, 1, 1}}));
+  scene.commit();
+  const Ray outside{{-5, 0.1f, 0.2f}, {1, 0, 0}};
+  const auto enter = scene.intersect(outside, kInfinity);
+  ASSERT_TRUE(enter);
+  EXPECT_FLOAT_EQ(enter->t, 4.f);
+  EXPECT_EQ(enter->ng, Vec3(-1, 0, 0));
+  EXPECT_LT(dot(outside.d, enter->ng), 0.f);
+  // Inside a closed mesh every ray sees ng along its direction (it is leaving).
+  Rng rng(7, 0);
+  for (int i = 0; i < 200; ++i) {
+    const Vec3 d = sample_uniform_sphere({rng.uniform(), rng.uniform()});
+    const auto leave = scene.intersect({{0.1f, -0.2f, 0.3f}, d}, kInfinity);
+    ASSERT_TRUE(leave);
+    EXPECT_GT(dot(d, leave->ng), 0.f);
+    EXPECT_NEAR(max_component(abs(leave->p)), 1.f, 1e-6f);
+  }
+}
+
+TEST(GeometryScene, AnalyticSphereHits) {
+  GeometryScene scene;
+  const Vec3 c{1, 2, 3};
+  scene.add_sphere(c, 2.f);
+  scene.commit();
+  const auto hit = scene.intersect({{1, 2, -10}, {0, 0, 1}}, kInfinity);
+  ASSERT_TRUE(hit);
+  EXPECT_FLOAT_EQ(hit->t, 11.f);
+  expect_near(hit->p, {1, 2, 1}, 1e-6f);
+  expect_near(hit->ng, {0, 0, -1}, 1e-6f);
+  EXPECT_NEAR(hit->uv.y, 1.f, 1e-3f);  // theta = pi at -z
+  // Non-unit direction: t is in units of the direction's length.
+  const auto scaled = scene.intersect({{1, 2, -10}, {0, 0, 2}}, kInfinity);
+  ASSERT_TRUE(scaled);
+  EXPECT_FLOAT_EQ(scaled->t, 5.5f);
+  // Tangent-ish miss and far miss.
+  EXPECT_FALSE(scene.intersect({{3.01f, 2, -10}, {0, 0, 1}}, kInfinity));
+  Rng rng(3, 0);
+  for (int i = 0; i < 200; ++i) {
+    const Vec3 d = sample_uniform_sphere({rng.uniform(), rng.uniform()});
+    const auto leave = scene.intersect({c + Vec3(0.3f, -0.1f, 0.5f), d}, kInfinity);
+    ASSERT_TRUE(leave);
+    EXPECT_GT(dot(d, leave->ng), 0.f);
+    EXPECT_NEAR(distance(leave->p, c), 2.f, 1e-5f);
+  }
+}
+
+TEST(GeometryScene, UvSphereMeshSeenFromInsideIsLeaving) {
+  GeometryScene scene;
+  scene.add_mesh(make_uv_sphere({0, 0, 0}, 1.f, 24, 48));
+  scene.commit();
+  Rng rng(11, 0);
+  for (int i = 0; i < 500; ++i) {
+    const Vec3 d = sample_uniform_sphere({rng.uniform(), rng.uniform()});
+    const auto hit = scene.intersect({{0, 0, 0}, d}, kInfinity);
+    ASSERT_TRUE(hit) << "watertight mesh leaked a ray";
+    EXPECT_GT(dot(d, hit->ng), 0.f);
+    EXPECT_GT(dot(hit->ns, hit->ng), 0.f);
+    EXPECT_NEAR(length(hit->ns), 1.f, 1e-5f);
+  }
+}
+
+TEST(GeometryScene, DiskHitAndRim) {
+  GeometryScene scene;
+  scene.add_mesh(make_disk({0, 0, 2}, {0, 0, 1}, 1.f, 128));
+  scene.commit();
+  const auto hit = scene.intersect({{0.3f, 0.2f, 5}, {0, 0, -1}}, kInfinity);
+  ASSERT_TRUE(hit);
+  EXPECT_FLOAT_EQ(hit->t, 3.f);
+  EXPECT_EQ(hit->ng, Vec3(0, 0, 1));
+  EXPECT_TRUE(scene.intersect({{0.99f, 0, 5}, {0, 0, -1}}, kInfinity));
+  EXPECT_FALSE(scene.intersect({{1.01f, 0, 5}, {0, 0, -1}}, kInfinity));
+}
+
+TEST(GeometryScene, Occlusion) {
+  GeometryScene scene;
+  scene.add_mesh(make_box({{-1, -1, -1}, {1, 1, 1}}));
+  scene.add_sphere({0, 0, 10}, 1.f);
+  scene.commit();
+  EXPECT_FALSE(scene.occluded({{-5, 0, 0}, {1, 0, 0}}, 3.9f));
+  EXPECT_TRUE(scene.occluded({{-5, 0, 0}, {1, 0, 0}}, 4.1f));
+  EXPECT_FALSE(scene.occluded({{0, 0, 5}, {0, 0, 1}}, 3.9f));
+  EXPECT_TRUE(scene.occluded({{0, 0, 5}, {0, 0, 1}}, 4.1f));
+}
+
+TEST(GeometryScene, SampleAreaIsUniformOnTheSurface) {
+  GeometryScene scene;
+  const int box = scene.add_mesh(make_box({{0, 0, 0}, {2, 1, 1}}));
+  const int sphere = scene.add_sphere({5, 5, 5}, 0.5f);
+  scene.commit();
+  EXPECT_FLOAT_EQ(scene.area(box), 10.f);
+  EXPECT_FLOAT_EQ(scene.area(sphere), kPi);
+
+  // Box faces -x,+x have area 1, the four others 2: chi-square over the six faces.
+  std::array<int, 6> counts{};
+  const int n = 100000;
+  Rng rng(5, 0);
+  for (int i = 0; i < n; ++i) {
+    const ShapeSample s = scene.sample_area(box, {rng.uniform(), rng.uniform()});
+    EXPECT_FLOAT_EQ(s.pdf_area, 0.1f);
+    int face = -1;
+    if (s.n.x != 0) face = s.n.x < 0 ? 0 : 1;
+    if (s.n.y != 0) face = s.n.y < 0 ? 2 : 3;
+    if (s.n.z != 0) face = s.n.z < 0 ? 4 : 5;
+    ASSERT_GE(face, 0);
+    const float coord = s.p[face / 2], expected = s.n[face / 2] < 0 ? 0.f : (face / 2 == 0 ? 2.f : 1.f);
+    EXPECT_NEAR(coord, expected, 1e-6f) << "sample is not on its face";
+    ++counts[face];
+  }
+  const std::array<float, 6> expected_fraction{0.1f, 0.1f, 0.2f, 0.2f, 0.2f, 0.2f};
+  double chi2 = 0;
+  for (int f = 0; f < 6; ++f) {
+    const double e = n * expected_fraction[f];
+    chi2 += (counts[f] - e) * (counts[f] - e) / e;
+  }
+  EXPECT_LT(chi2, 20.5) << "chi-square, 5 dof, p = 0.001";
+
+  // Sphere: on the surface, outward normal, and z uniform in [-r, r] (Archimedes).
+  double z_mean = 0, z2_mean = 0;
+  for (int i = 0; i < n; ++i) {
+    const ShapeSample s = scene.sample_area(sphere, {rng.uniform(), rng.uniform()});
+    EXPECT_NEAR(distance(s.p, {5, 5, 5}), 0.5f, 1e-5f);
+    expect_near(s.n, (s.p - Vec3(5, 5, 5)) / 0.5f, 1e-4f);
+    EXPECT_FLOAT_EQ(s.pdf_area, 1.f / kPi);
+    const double z = (s.p.z - 5.f) / 0.5f;
+    z_mean += z / n;
+    z2_mean += z * z / n;
+  }
+  EXPECT_NEAR(z_mean, 0.0, 0.01);
+  EXPECT_NEAR(z2_mean, 1.0 / 3.0, 0.01);
+}
+
+TEST(GeometryScene, ConcurrentIntersectionsAgree) {
+  GeometryScene scene;
+  scene.add_mesh(make_uv_sphere({0, 0, 0}, 1.f, 16, 32));
+  scene.add_sphere({3, 0, 0}, 1.f);
+  scene.commit();
+  std::atomic<int> mismatches{0};
+  auto worker = [&](uint64_t stream) {
+    Rng rng(stream, 0);
+    for (int i = 0; i < 20000; ++i) {
+      const Vec3 d = sample_uniform_sphere({rng.uniform(), rng.uniform()});
+      const Ray r{{1.5f, 0, 0}, d};
+      const auto hit = scene.intersect(r, kInfinity);
+      if (bool(hit) != scene.occluded(r, kInfinity)) ++mismatches;
+    }
+  };
+  std::thread a(worker, 1), b(worker, 2);
+  a.join();
+  b.join();
+  EXPECT_EQ(mismatches.load(), 0);
+}
+
+TEST(GeometryScene, MoveKeepsTheScene) {
+  GeometryScene a;
+  a.add_sphere({0, 0, 0}, 1.f);
+  a.commit();
+  GeometryScene b(std::move(a));
+  EXPECT_TRUE(b.intersect({{0, 0, -5}, {0, 0, 1}}, kInfinity));
+  GeometryScene c;
+  c = std::move(b);
+  EXPECT_TRUE(c.intersect({{0, 0, -5}, {0, 0, 1}}, kInfinity));
+}

@@ -1,0 +1,245 @@
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <string>
+#include <unistd.h>
+
+#include "core/constants.h"
+#include "core/error.h"
+#include "geometry/mesh.h"
+
+using namespace chlorovdb;
+namespace fs = std::filesystem;
+
+namespace {
+
+// A per-test scratch file under the system temp dir (removed at the end of the test).
+class TempFile {
+ public:
+  TempFile(const std::string& name, const std::string& contents) {
+    path_ = fs::temp_directory_path() / ("chlorovdb_geometry_" + std::to_string(::getpid()) + "_" + name);
+    std::ofstream(path_, std::ios::binary) << contents;
+  }
+  ~TempFile() { fs::remove(path_); }
+  const fs::path& path() const { return path_; }
+
+ private:
+  fs::path path_;
+};
+
+// Unit cube as 8 shared vertices and 6 quads (CCW from outside): exercises triangulation.
+const char* kCubeObj = R"(# unit cube
+v 0 0 0
+v 1 0 0
+v 1 1 0
+v 0 1 0
+v 0 0 1
+v 1 0 1
+v 1 1 1
+v 0 1 1
+f 1 4 3 2
+f 5 6 7 8
+f 1 2 6 5
+f 4 8 7 3
+f 1 5 8 4
+f 2 3 7 6
+)";
+
+std::string expect_input_error(const fs::path& file) {
+  try {
+    load_mesh(file);
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  ADD_FAILURE() << "no InputError for " << file;
+  return {};
+}
+
+}  // namespace
+
+TEST(Mesh, QuadHasUpwardNormalAndArea) {
+  const TriangleMesh q = make_quad({0, 0, 0}, {2, 0, 0}, {0, 3, 0});
+  EXPECT_EQ(q.triangle_count(), 2);
+  EXPECT_FLOAT_EQ(mesh_area(q), 6.f);
+  EXPECT_FALSE(is_closed(q));
+  for (const Vec3& n : q.normals) EXPECT_EQ(n, Vec3(0, 0, 1));
+}
+
+TEST(Mesh, BoxIsClosedWithOutwardWinding) {
+  const Bounds3 b{{0, 0, 0}, {2, 3, 4}};
+  const TriangleMesh box = make_box(b);
+  EXPECT_EQ(box.triangle_count(), 12);
+  EXPECT_TRUE(is_closed(box));
+  EXPECT_FLOAT_EQ(mesh_area(box), 2.f * (6 + 8 + 12));
+  for (int t = 0; t < box.triangle_count(); ++t) {
+    const Vec3 p0 = box.positions[box.indices[3 * t]], p1 = box.positions[box.indices[3 * t + 1]],
+               p2 = box.positions[box.indices[3 * t + 2]];
+    const Vec3 ng = normalize(cross(p1 - p0, p2 - p0));
+    const Vec3 centroid = (p0 + p1 + p2) / 3.f;
+    EXPECT_GT(dot(ng, centroid - b.center()), 0.f) << "triangle " << t << " winds inward";
+    EXPECT_EQ(ng, box.normals[box.indices[3 * t]]);
+  }
+}
+
+TEST(Mesh, OpenOrInconsistentMeshesAreNotClosed) {
+  TriangleMesh box = make_box({{0, 0, 0}, {1, 1, 1}});
+  TriangleMesh holed = box;
+  holed.indices.resize(holed.indices.size() - 3);
+  EXPECT_FALSE(is_closed(holed));
+  TriangleMesh flipped = box;
+  std::swap(flipped.indices[1], flipped.indices[2]);
+  EXPECT_FALSE(is_closed(flipped));
+  EXPECT_FALSE(is_closed(make_disk({0, 0, 0}, {0, 0, 1}, 1.f, 16)));
+  EXPECT_FALSE(is_closed(TriangleMesh{}));
+}
+
+TEST(Mesh, UvSphereIsClosedAndConvergesToSphereArea) {
+  const TriangleMesh s = make_uv_sphere({1, 2, 3}, 2.f, 64, 128);
+  EXPECT_TRUE(is_closed(s));
+  EXPECT_NEAR(mesh_area(s), 4.f * kPi * 4.f, 0.01f * 4.f * kPi * 4.f);
+  for (const Vec3& p : s.positions) EXPECT_NEAR(distance(p, {1, 2, 3}), 2.f, 1e-5f);
+  TriangleMesh copy = s;
+  EXPECT_EQ(drop_degenerate_triangles(copy), 0) << "pole bands must not emit degenerate triangles";
+}
+
+TEST(Mesh, DiskWindsTowardItsNormal) {
+  const Vec3 n = normalize(Vec3{1, -2, 0.5f});
+  const TriangleMesh d = make_disk({0, 0, 0}, n, 1.5f, 256);
+  for (int t = 0; t < d.triangle_count(); ++t) {
+    const Vec3 p0 = d.positions[d.indices[3 * t]], p1 = d.positions[d.indices[3 * t + 1]],
+               p2 = d.positions[d.indices[3 * t + 2]];
+    EXPECT_GT(dot(cross(p1 - p0, p2 - p0), n), 0.f);
+  }
+  EXPECT_NEAR(mesh_area(d), kPi * 1.5f * 1.5f, 1e-3f * kPi * 2.25f);
+}
+
+TEST(Mesh, MirroringTransformKeepsNormalsOutward) {
+  const TriangleMesh box = transform_mesh(make_box({{0, 0, 0}, {1, 1, 1}}), Transform::scale({-1, 2, 1}));
+  EXPECT_TRUE(is_closed(box));
+  const Vec3 center{-0.5f, 1.f, 0.5f};
+  for (int t = 0; t < box.triangle_count(); ++t) {
+    const Vec3 p0 = box.positions[box.indices[3 * t]], p1 = box.positions[box.indices[3 * t + 1]],
+               p2 = box.positions[box.indices[3 * t + 2]];
+    const Vec3 ng = cross(p1 - p0, p2 - p0);
+    EXPECT_GT(dot(ng, (p0 + p1 + p2) / 3.f - center), 0.f);
+    EXPECT_GT(dot(ng, box.normals[box.indices[3 * t]]), 0.f);
+  }
+}
+
+TEST(Mesh, DegenerateTrianglesAreDroppedAndCounted) {
+  TriangleMesh m = make_quad({0, 0, 0}, {1, 0, 0}, {0, 1, 0});
+  m.positions.push_back({2, 0, 0});
+  m.positions.push_back({3, 0, 0});
+  m.positions.push_back({4, 0, 0});
+  m.indices.insert(m.indices.end(), {4, 5, 6, 0, 0, 1});  // collinear, repeated index
+  EXPECT_EQ(drop_degenerate_triangles(m), 2);
+  EXPECT_EQ(m.triangle_count(), 2);
+}
+
+TEST(MeshLoad, ObjQuadsAreTriangulatedAndWelded) {
+  const TempFile file("cube.obj", kCubeObj);
+  MeshLoadInfo info;
+  const TriangleMesh m = load_mesh(file.path(), &info);
+  EXPECT_EQ(m.triangle_count(), 12);
+  EXPECT_EQ(info.degenerate_dropped, 0);
+  EXPECT_EQ(info.source_meshes, 1);
+  EXPECT_TRUE(is_closed(m));
+  EXPECT_FLOAT_EQ(mesh_area(m), 6.f);
+  EXPECT_TRUE(m.normals.empty());
+}
+
+TEST(MeshLoad, ObjDegenerateFaceIsDroppedAndCounted) {
+  const std::string obj = std::string(kCubeObj) + "v 2 0 0\nv 3 0 0\nv 4 0 0\nf 9 10 11\n";
+  const TempFile file("cube_degenerate.obj", obj);
+  MeshLoadInfo info;
+  const TriangleMesh m = load_mesh(file.path(), &info);
+  EXPECT_EQ(info.degenerate_dropped, 1);
+  EXPECT_EQ(m.triangle_count(), 12);
+}
+
+TEST(MeshLoad, PlyTetrahedronWithNormals) {
+  const TempFile file("tetra.ply", R"(ply
+format ascii 1.0
+element vertex 4
+property float x
+property float y
+property float z
+property float nx
+property float ny
+property float nz
+element face 4
+property list uchar int vertex_indices
+end_header
+0 0 0 -1 -1 -1
+1 0 0 1 0 0
+0 1 0 0 1 0
+0 0 1 0 0 1
+3 0 2 1
+3 0 1 3
+3 0 3 2
+3 1 2 3
+)");
+  const TriangleMesh m = load_mesh(file.path());
+  EXPECT_EQ(m.triangle_count(), 4);
+  EXPECT_TRUE(is_closed(m));
+  ASSERT_EQ(m.normals.size(), m.positions.size());
+  for (const Vec3& n : m.normals) EXPECT_NEAR(length(n), 1.f, 1e-6f);  // normalised on load
+  EXPECT_NEAR(mesh_area(m), 1.5f + 0.5f * std::sqrt(3.f), 1e-5f);
+}
+
+TEST(MeshLoad, GltfNodesAreMergedWithTheirTransforms) {
+  // One triangle mesh instanced by two nodes at z = +5 and z = -5 (buffer: 3 float3 positions, 3 uint16 indices).
+  const TempFile file("two_nodes.gltf", R"({
+  "asset": {"version": "2.0"},
+  "scene": 0,
+  "scenes": [{"nodes": [0, 1]}],
+  "nodes": [{"mesh": 0, "translation": [0, 0, 5]}, {"mesh": 0, "translation": [0, 0, -5]}],
+  "meshes": [{"primitives": [{"attributes": {"POSITION": 0}, "indices": 1}]}],
+  "buffers": [{"byteLength": 44, "uri": "data:application/octet-stream;base64,AAAAAAAAAAAAAAAAAACAPwAAAAAAAAAAAAAAAAAAgD8AAAAAAAABAAIAAAA="}],
+  "bufferViews": [{"buffer": 0, "byteOffset": 0, "byteLength": 36}, {"buffer": 0, "byteOffset": 36, "byteLength": 6}],
+  "accessors": [
+    {"bufferView": 0, "componentType": 5126, "count": 3, "type": "VEC3", "min": [0, 0, 0], "max": [1, 1, 0]},
+    {"bufferView": 1, "componentType": 5123, "count": 3, "type": "SCALAR"}
+  ]
+})");
+  const TriangleMesh m = load_mesh(file.path());
+  ASSERT_EQ(m.triangle_count(), 2);
+  float z_min = 1e9f, z_max = -1e9f;
+  for (uint32_t i : m.indices) z_min = std::min(z_min, m.positions[i].z), z_max = std::max(z_max, m.positions[i].z);
+  EXPECT_FLOAT_EQ(z_min, -5.f);
+  EXPECT_FLOAT_EQ(z_max, 5.f);
+  EXPECT_FLOAT_EQ(mesh_area(m), 1.f);
+}
+
+TEST(MeshLoad, MissingFileNamesTheFile) {
+  const std::string msg = expect_input_error("/nonexistent/dir/plant_leaf.obj");
+  EXPECT_NE(msg.find("plant_leaf.obj"), std::string::npos) << msg;
+}
+
+TEST(MeshLoad, FileWithoutTrianglesIsRejected) {
+  const TempFile file("points_only.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\n");
+  const std::string msg = expect_input_error(file.path());
+  EXPECT_NE(msg.find(file.path().string()), std::string::npos) << msg;
+  EXPECT_TRUE(msg.find("no triangles") != std::string::npos || msg.find("no faces") != std::string::npos) << msg;
+}
+
+TEST(MeshLoad, GarbageFileIsRejected) {
+  std::string garbage;
+  for (int i = 0; i < 4096; ++i) garbage.push_back(char((i * 7919 + 13) % 256));
+  const TempFile file("garbage.ply", garbage);
+  const std::string msg = expect_input_error(file.path());
+  EXPECT_NE(msg.find(file.path().string()), std::string::npos) << msg;
+}
+
+TEST(MeshLoad, NanCoordinateIsRejected) {
+  const TempFile file("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n");
+  const std::string msg = expect_input_error(file.path());
+  EXPECT_NE(msg.find(file.path().string()), std::string::npos) << msg;
+}
+
+TEST(MeshLoad, AllDegenerateIsRejected) {
+  const TempFile file("line.obj", "v 0 0 0\nv 1 0 0\nv 2 0 0\nf 1 2 3\n");
+  const std::string msg = expect_input_error(file.path());
+  EXPECT_NE(msg.find("degenerate"), std::string::npos) << msg;
+}
