@@ -20,6 +20,7 @@ class Spectrum {
   struct Tabulated {
     std::vector<float> lambda;  // strictly increasing, nm
     std::vector<float> value;
+    float inv_step = 0.f;  // 1/nm when the samples are evenly spaced (O(1) lookup), else 0
   };
   struct Blackbody {
     float temperature_K;

@@ -1,0 +1,73 @@
+#include "spectra/wavelength_sampling.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cmath>
+#include <stdexcept>
+
+#include "spectra/sampled.h"
+
+namespace chlorovdb {
+
+namespace {
+
+constexpr double kVisibleCenter = 538.0;  // nm
+constexpr double kVisibleRate = 0.0072;   // 1/nm
+
+// ∫ sech²(a(λ−c)) dλ = tanh(a(λ−c)) / a, so the CDF over [kLambdaMin, λ] is
+// (tanh(a(λ−c)) − t_min) / (t_max − t_min) with t_* the tanh at the range ends.
+const double kTanhMin = std::tanh(kVisibleRate * (kLambdaMin - kVisibleCenter));
+const double kTanhMax = std::tanh(kVisibleRate * (kLambdaMax - kVisibleCenter));
+
+void check_count(int count) {
+  if (count < 1 || count > kMaxWavelengths)
+    throw std::invalid_argument(fmt::format("wavelength count must be in 1..{}, got {}", kMaxWavelengths, count));
+}
+
+// Stratified offsets of the hero scheme: u_i = frac(u + i / count).
+float stratum(float u, int i, int count) {
+  const float up = u + float(i) / float(count);
+  return up >= 1.f ? up - 1.f : up;
+}
+
+}  // namespace
+
+float visible_wavelength_pdf(float lambda_nm) {
+  if (!(lambda_nm >= kLambdaMin && lambda_nm <= kLambdaMax)) return 0.f;
+  const double c = std::cosh(kVisibleRate * (lambda_nm - kVisibleCenter));
+  return float(kVisibleRate / ((kTanhMax - kTanhMin) * c * c));
+}
+
+float sample_visible_wavelength(float u) {
+  const double t = kTanhMin + double(u) * (kTanhMax - kTanhMin);
+  const double lambda = kVisibleCenter + std::atanh(t) / kVisibleRate;
+  return std::clamp(float(lambda), kLambdaMin, kLambdaMax);
+}
+
+SampledWavelengths SampledWavelengths::sample_visible(float u, int count) {
+  check_count(count);
+  SampledWavelengths w;
+  w.count_ = count;
+  for (int i = 0; i < count; ++i) {
+    w.lambda_[i] = sample_visible_wavelength(stratum(u, i, count));
+    w.pdf_[i] = visible_wavelength_pdf(w.lambda_[i]);
+  }
+  return w;
+}
+
+SampledWavelengths SampledWavelengths::sample_uniform(float u, int count, float lambda_min, float lambda_max) {
+  check_count(count);
+  if (!(lambda_max > lambda_min) || !std::isfinite(lambda_min) || !std::isfinite(lambda_max))
+    throw std::invalid_argument(fmt::format("sample_uniform: empty range [{}, {}] nm", lambda_min, lambda_max));
+  SampledWavelengths w;
+  w.count_ = count;
+  for (int i = 0; i < count; ++i) {
+    const float ui = stratum(u, i, count);
+    w.lambda_[i] = std::min((1.f - ui) * lambda_min + ui * lambda_max, lambda_max);
+    w.pdf_[i] = 1.f / (lambda_max - lambda_min);
+  }
+  return w;
+}
+
+}  // namespace chlorovdb
