@@ -1,0 +1,144 @@
+#include "film/film.h"
+
+#include <fmt/format.h>
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <stdexcept>
+
+#include "spectra/color.h"
+
+namespace chlorovdb {
+
+namespace {
+
+// "S0" channel name of the spectral layout: wavelength with a decimal comma, e.g. "552,5nm".
+std::string spectral_channel_name(float lambda_nm) {
+  std::string s = fmt::format("{}", lambda_nm);  // shortest round-trip form
+  if (s.find('.') == std::string::npos) s += ".0";
+  std::replace(s.begin(), s.end(), '.', ',');
+  return s + "nm";
+}
+
+}  // namespace
+
+Film::Film(int width, int height, std::vector<std::string> layer_names, ColorSpace color_space)
+    : width_(width), height_(height), layer_names_(std::move(layer_names)), color_space_(color_space) {
+  if (width <= 0 || height <= 0 || layer_names_.empty())
+    throw std::invalid_argument(fmt::format("Film: needs a positive size and at least one layer ({}x{}, {} layers)", width,
+                                            height, layer_names_.size()));
+  cie_y_integral();  // load the colour-matching functions now: a missing table fails at setup, not mid-render
+  xyz_.assign(layer_names_.size(), std::vector<double>(size_t(width) * size_t(height) * 3, 0.0));
+}
+
+Film::Film(Film&& o) noexcept
+    : width_(o.width_),
+      height_(o.height_),
+      layer_names_(std::move(o.layer_names_)),
+      color_space_(o.color_space_),
+      xyz_(std::move(o.xyz_)),
+      spectral_min_nm_(o.spectral_min_nm_),
+      spectral_max_nm_(o.spectral_max_nm_),
+      spectral_bins_(o.spectral_bins_),
+      spectral_(std::move(o.spectral_)),
+      nonfinite_(o.nonfinite_samples()) {}
+
+Film& Film::operator=(Film&& o) noexcept {
+  width_ = o.width_;
+  height_ = o.height_;
+  layer_names_ = std::move(o.layer_names_);
+  color_space_ = o.color_space_;
+  xyz_ = std::move(o.xyz_);
+  spectral_min_nm_ = o.spectral_min_nm_;
+  spectral_max_nm_ = o.spectral_max_nm_;
+  spectral_bins_ = o.spectral_bins_;
+  spectral_ = std::move(o.spectral_);
+  nonfinite_.store(o.nonfinite_samples(), std::memory_order_relaxed);
+  return *this;
+}
+
+void Film::enable_spectral(float lambda_min_nm, float lambda_max_nm, int bins) {
+  if (!(lambda_max_nm > lambda_min_nm) || !std::isfinite(lambda_min_nm) || !std::isfinite(lambda_max_nm) || bins < 1)
+    throw std::invalid_argument(
+        fmt::format("Film: spectral bins need lambda_min < lambda_max and bins >= 1 ({}, {}, {})", lambda_min_nm, lambda_max_nm, bins));
+  spectral_min_nm_ = lambda_min_nm;
+  spectral_max_nm_ = lambda_max_nm;
+  spectral_bins_ = bins;
+  spectral_.assign(size_t(width_) * size_t(height_) * size_t(bins), 0.0);
+}
+
+void Film::add_sample(int x, int y, int layer, const SampledSpectrum& L, const SampledWavelengths& lambda) {
+  assert(x >= 0 && x < width_ && y >= 0 && y < height_ && layer >= 0 && layer < int(xyz_.size()));
+  const XYZ xyz = to_xyz(L, lambda);
+  if (L.has_nonfinite() || !std::isfinite(xyz.x) || !std::isfinite(xyz.y) || !std::isfinite(xyz.z)) {
+    nonfinite_.fetch_add(1, std::memory_order_relaxed);
+    return;
+  }
+  const size_t pixel = size_t(y) * size_t(width_) + size_t(x);
+  double* sum = &xyz_[size_t(layer)][pixel * 3];
+  sum[0] += xyz.x;
+  sum[1] += xyz.y;
+  sum[2] += xyz.z;
+
+  if (layer != 0 || spectral_bins_ == 0) return;
+  const float bins_per_nm = float(spectral_bins_) / (spectral_max_nm_ - spectral_min_nm_);
+  double* bins = &spectral_[pixel * size_t(spectral_bins_)];
+  for (int i = 0; i < lambda.count(); ++i) {
+    if (lambda.pdf(i) == 0.f || !(lambda[i] >= spectral_min_nm_ && lambda[i] < spectral_max_nm_)) continue;
+    const int b = std::min(int((lambda[i] - spectral_min_nm_) * bins_per_nm), spectral_bins_ - 1);
+    bins[b] += double(L[i]) / (double(lambda.pdf(i)) * lambda.count());
+  }
+}
+
+Image Film::to_image(double samples_per_pixel) const {
+  if (!(samples_per_pixel > 0)) throw std::invalid_argument(fmt::format("Film::to_image: samples_per_pixel = {}", samples_per_pixel));
+  const size_t pixel_count = size_t(width_) * size_t(height_);
+  const double inv_spp = 1.0 / samples_per_pixel;
+  RGB (*const to_rgb)(const XYZ&) = color_space_ == ColorSpace::sRGB ? xyz_to_linear_srgb : xyz_to_acescg;
+
+  Image image;
+  image.width = width_;
+  image.height = height_;
+  image.chromaticities = color_space_ == ColorSpace::sRGB ? kSrgbChromaticities : kAcesCgChromaticities;
+  for (size_t l = 0; l < xyz_.size(); ++l) {
+    ImageLayer layer{layer_names_[l], {"R", "G", "B"}, std::vector<float>(pixel_count * 3)};
+    for (size_t p = 0; p < pixel_count; ++p) {
+      const double* s = &xyz_[l][p * 3];
+      const RGB rgb = to_rgb({s[0] * inv_spp, s[1] * inv_spp, s[2] * inv_spp});
+      layer.pixels[p * 3 + 0] = float(rgb.r);
+      layer.pixels[p * 3 + 1] = float(rgb.g);
+      layer.pixels[p * 3 + 2] = float(rgb.b);
+    }
+    image.layers.push_back(std::move(layer));
+  }
+  if (spectral_bins_ > 0) {
+    const double width_nm = (double(spectral_max_nm_) - spectral_min_nm_) / spectral_bins_;
+    ImageLayer layer{"S0", {}, std::vector<float>(spectral_.size())};
+    for (int b = 0; b < spectral_bins_; ++b)
+      layer.channels.push_back(spectral_channel_name(float(spectral_min_nm_ + (b + 0.5) * width_nm)));
+    const double norm = inv_spp / width_nm;
+    for (size_t i = 0; i < spectral_.size(); ++i) layer.pixels[i] = float(spectral_[i] * norm);
+    image.layers.push_back(std::move(layer));
+    image.metadata.set("spectral_bin_width_nm", width_nm);
+  }
+  image.metadata.set("color_space", color_space_ == ColorSpace::sRGB ? std::string("linear sRGB (D65)")
+                                                                      : std::string("ACEScg (AP1, Bradford-adapted from D65)"));
+  image.metadata.set("samples_per_pixel", samples_per_pixel);
+  image.metadata.set("nonfinite_samples", double(nonfinite_samples()));  // double: counts can pass 2^31
+  return image;
+}
+
+void Film::merge(const Film& other) {
+  if (other.width_ != width_ || other.height_ != height_ || other.layer_names_ != layer_names_ ||
+      other.spectral_bins_ != spectral_bins_ || other.spectral_min_nm_ != spectral_min_nm_ || other.spectral_max_nm_ != spectral_max_nm_)
+    throw std::invalid_argument(fmt::format("Film::merge: films differ ({}x{}, {} layers, {} bins vs {}x{}, {} layers, {} bins)", width_,
+                                            height_, layer_names_.size(), spectral_bins_, other.width_, other.height_,
+                                            other.layer_names_.size(), other.spectral_bins_));
+  for (size_t l = 0; l < xyz_.size(); ++l)
+    for (size_t i = 0; i < xyz_[l].size(); ++i) xyz_[l][i] += other.xyz_[l][i];
+  for (size_t i = 0; i < spectral_.size(); ++i) spectral_[i] += other.spectral_[i];
+  nonfinite_.fetch_add(other.nonfinite_samples(), std::memory_order_relaxed);
+}
+
+}  // namespace chlorovdb

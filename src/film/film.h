@@ -1,0 +1,67 @@
+#pragma once
+// The film: per pixel and per layer, double-precision sums of each camera
+// sample's CIE XYZ estimate (spectra/color.h to_xyz); at the end the mean is
+// converted to linear sRGB or ACEScg. Layer 0 is the beauty (total radiance);
+// further layers hold parts of it (e.g. fluorescence, non-fluorescence).
+//
+// Optional spectral bins record the beauty layer's spectral radiance: each lane
+// adds L_i / (pdf_i · count) to the bin holding λ_i, an unbiased estimate of
+// ∫_bin L dλ; divided by the bin width and spp it is the bin-averaged spectral
+// radiance (W m⁻² sr⁻¹ nm⁻¹, relative), written as an EXR spectral layer.
+#include <atomic>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "io/image.h"
+#include "spectra/sampled.h"
+
+namespace chlorovdb {
+
+enum class ColorSpace { sRGB, ACEScg };
+
+class Film {
+ public:
+  Film(int width, int height, std::vector<std::string> layer_names, ColorSpace color_space);
+  Film(Film&& other) noexcept;
+  Film& operator=(Film&& other) noexcept;
+
+  int width() const { return width_; }
+  int height() const { return height_; }
+  const std::vector<std::string>& layer_names() const { return layer_names_; }
+  ColorSpace color_space() const { return color_space_; }
+
+  // Bins of equal width over [lambda_min, lambda_max) nm for the beauty layer.
+  void enable_spectral(float lambda_min_nm, float lambda_max_nm, int bins);
+
+  // Thread-safe for distinct pixels (tiles are disjoint), so pixels need no atomics.
+  // A sample with a non-finite value in any lane, or a non-finite estimate, is
+  // dropped and counted instead.
+  void add_sample(int x, int y, int layer, const SampledSpectrum& L, const SampledWavelengths& lambda);
+  uint64_t nonfinite_samples() const { return nonfinite_.load(std::memory_order_relaxed); }
+
+  // Mean over `samples_per_pixel` samples: one RGB layer per layer name (channels
+  // R, G, B), then the spectral layer "S0" (channels "<centre>nm", decimal comma)
+  // if enabled. Metadata: color_space, samples_per_pixel, nonfinite_samples.
+  Image to_image(double samples_per_pixel) const;
+
+  // Raw sums, for merging renders of the same view: (y·width + x)·3 + {X, Y, Z},
+  // and (y·width + x)·bins + bin for the spectral sums.
+  const std::vector<double>& raw_xyz(int layer) const { return xyz_[size_t(layer)]; }
+  const std::vector<double>& raw_spectral() const { return spectral_; }
+  // Adds another film's sums and non-finite count; throws std::invalid_argument
+  // unless size, layers and spectral bins agree.
+  void merge(const Film& other);
+
+ private:
+  int width_, height_;
+  std::vector<std::string> layer_names_;
+  ColorSpace color_space_;
+  std::vector<std::vector<double>> xyz_;
+  float spectral_min_nm_ = 0.f, spectral_max_nm_ = 0.f;
+  int spectral_bins_ = 0;
+  std::vector<double> spectral_;
+  std::atomic<uint64_t> nonfinite_{0};
+};
+
+}  // namespace chlorovdb

@@ -1,0 +1,159 @@
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <limits>
+
+#include "core/rng.h"
+#include "film/film.h"
+#include "spectra/color.h"
+#include "spectra/library.h"
+
+using namespace chlorovdb;
+
+namespace {
+
+// Sample mean and standard error of a stream of values.
+struct Stats {
+  double sum = 0, sum2 = 0;
+  int n = 0;
+  void add(double v) { sum += v, sum2 += v * v, ++n; }
+  double mean() const { return sum / n; }
+  double sigma() const { return std::sqrt(std::max(0.0, sum2 / n - mean() * mean()) / (n - 1)); }
+};
+
+}  // namespace
+
+TEST(Film, ConstantSpectrumGivesItsXyzAndRgb) {
+  const Spectrum one = Spectrum::constant(1.f);
+  const XYZ exact = spectrum_to_xyz(one);
+  Film film(3, 2, {"beauty"}, ColorSpace::sRGB);
+  Rng rng(5, 0);
+  const int spp = 4000;
+  Stats x, y, z;
+  for (int k = 0; k < spp; ++k) {
+    const SampledWavelengths lambda = SampledWavelengths::sample_visible(rng.uniform(), 4);
+    const SampledSpectrum L = one.sample(lambda);
+    film.add_sample(1, 1, 0, L, lambda);
+    const XYZ e = to_xyz(L, lambda);
+    x.add(e.x), y.add(e.y), z.add(e.z);
+  }
+  const size_t p = (1 * 3 + 1) * 3;
+  const std::vector<double>& raw = film.raw_xyz(0);
+  EXPECT_NEAR(raw[p + 0] / spp, x.mean(), 1e-12);
+  EXPECT_NEAR(raw[p + 1] / spp, y.mean(), 1e-12);
+  EXPECT_NEAR(raw[p + 2] / spp, z.mean(), 1e-12);
+  EXPECT_NEAR(y.mean(), exact.y, 4 * y.sigma());
+  EXPECT_NEAR(x.mean(), exact.x, 4 * x.sigma());
+  EXPECT_NEAR(z.mean(), exact.z, 4 * z.sigma());
+
+  const Image img = film.to_image(spp);
+  ASSERT_EQ(img.layers.size(), 1u);
+  EXPECT_EQ(img.layers[0].name, "beauty");
+  EXPECT_EQ(img.layers[0].channels, (std::vector<std::string>{"R", "G", "B"}));
+  const RGB expected = xyz_to_linear_srgb({x.mean(), y.mean(), z.mean()});
+  const float* px = &img.layers[0].pixels[(1 * 3 + 1) * 3];
+  EXPECT_NEAR(px[0], expected.r, 1e-6);
+  EXPECT_NEAR(px[1], expected.g, 1e-6);
+  EXPECT_NEAR(px[2], expected.b, 1e-6);
+  // Equal energy is close to (but not exactly) the sRGB white.
+  const RGB white = xyz_to_linear_srgb(exact);
+  EXPECT_NEAR(px[0], white.r, 0.02);
+  EXPECT_NEAR(px[1], white.g, 0.02);
+  EXPECT_NEAR(px[2], white.b, 0.02);
+  // Pixels without samples stay black.
+  for (int c = 0; c < 3; ++c) EXPECT_EQ(img.layers[0].pixels[c], 0.f);
+  EXPECT_EQ(std::get<double>(*img.metadata.find("samples_per_pixel")), spp);
+}
+
+TEST(Film, D65IsNeutralInAcesCg) {
+  const Spectrum d65 = named_spectrum("D65").scaled(0.01f);
+  Film film(1, 1, {"beauty"}, ColorSpace::ACEScg);
+  Rng rng(9, 0);
+  const int spp = 20000;
+  for (int k = 0; k < spp; ++k) {
+    const SampledWavelengths lambda = SampledWavelengths::sample_visible(rng.uniform(), 8);
+    film.add_sample(0, 0, 0, d65.sample(lambda), lambda);
+  }
+  const Image img = film.to_image(spp);
+  const std::vector<float>& px = img.layers[0].pixels;
+  EXPECT_NEAR(px[0] / px[1], 1.f, 0.01f);
+  EXPECT_NEAR(px[2] / px[1], 1.f, 0.01f);
+  EXPECT_FLOAT_EQ(float(img.chromaticities->white_x), 0.32168f);
+}
+
+TEST(Film, NonFiniteSamplesAreCountedAndDropped) {
+  Film clean(2, 1, {"beauty", "fluorescence"}, ColorSpace::sRGB);
+  Film dirty(2, 1, {"beauty", "fluorescence"}, ColorSpace::sRGB);
+  const SampledWavelengths lambda = SampledWavelengths::sample_visible(0.3f, 4);
+  const SampledSpectrum L = Spectrum::constant(2.f).sample(lambda);
+  SampledSpectrum nan = L, inf = L;
+  nan[2] = std::numeric_limits<float>::quiet_NaN();
+  inf[0] = std::numeric_limits<float>::infinity();
+  for (Film* f : {&clean, &dirty}) {
+    f->add_sample(0, 0, 0, L, lambda);
+    f->add_sample(1, 0, 1, L, lambda);
+  }
+  dirty.add_sample(0, 0, 0, nan, lambda);
+  dirty.add_sample(1, 0, 1, inf, lambda);
+  EXPECT_EQ(clean.nonfinite_samples(), 0u);
+  EXPECT_EQ(dirty.nonfinite_samples(), 2u);
+  const Image a = clean.to_image(1), b = dirty.to_image(1);
+  for (size_t l = 0; l < a.layers.size(); ++l) {
+    EXPECT_EQ(a.layers[l].pixels, b.layers[l].pixels);
+    for (float v : b.layers[l].pixels) EXPECT_TRUE(std::isfinite(v));
+  }
+  EXPECT_EQ(std::get<double>(*b.metadata.find("nonfinite_samples")), 2.0);
+}
+
+TEST(Film, SpectralBinsRecoverATabulatedSpectrum) {
+  const Spectrum d65 = named_spectrum("D65");
+  const float lo = 400, hi = 700;
+  const int bins = 15, count = 4, spp = 20000;
+  Film film(1, 1, {"beauty"}, ColorSpace::sRGB);
+  film.enable_spectral(lo, hi, bins);
+  const double width = (hi - lo) / bins;
+  std::vector<Stats> stats(bins);
+  Rng rng(21, 0);
+  for (int k = 0; k < spp; ++k) {
+    const SampledWavelengths lambda = SampledWavelengths::sample_visible(rng.uniform(), count);
+    const SampledSpectrum L = d65.sample(lambda);
+    film.add_sample(0, 0, 0, L, lambda);
+    std::vector<double> sample(bins, 0.0);  // this sample's estimate of each bin average
+    for (int i = 0; i < count; ++i)
+      if (lambda[i] >= lo && lambda[i] < hi) sample[int((lambda[i] - lo) / width)] += L[i] / (lambda.pdf(i) * count * width);
+    for (int b = 0; b < bins; ++b) stats[b].add(sample[b]);
+  }
+  const Image img = film.to_image(spp);
+  const ImageLayer* s0 = img.find_layer("S0");
+  ASSERT_NE(s0, nullptr);
+  ASSERT_EQ(s0->channels.size(), size_t(bins));
+  EXPECT_EQ(s0->channels[0], "410,0nm");
+  EXPECT_EQ(s0->channels[14], "690,0nm");
+  for (int b = 0; b < bins; ++b) {
+    const double exact = d65.integral(lo + b * width, lo + (b + 1) * width) / width;
+    EXPECT_NEAR(s0->pixels[b], stats[b].mean(), 1e-5 * stats[b].mean()) << b;
+    EXPECT_NEAR(s0->pixels[b], exact, 4 * stats[b].sigma()) << "bin " << b << " sigma " << stats[b].sigma();
+  }
+}
+
+TEST(Film, MergeAddsSums) {
+  const Spectrum d65 = named_spectrum("D65");
+  Film all(2, 2, {"beauty"}, ColorSpace::sRGB), first(2, 2, {"beauty"}, ColorSpace::sRGB), second(2, 2, {"beauty"}, ColorSpace::sRGB);
+  for (Film* f : {&all, &first, &second}) f->enable_spectral(360, 830, 47);
+  Rng rng(2, 0);
+  for (int k = 0; k < 200; ++k) {
+    const SampledWavelengths lambda = SampledWavelengths::sample_visible(rng.uniform(), 4);
+    const SampledSpectrum L = d65.sample(lambda);
+    all.add_sample(k % 2, 1, 0, L, lambda);
+    (k < 100 ? first : second).add_sample(k % 2, 1, 0, L, lambda);
+  }
+  first.merge(second);
+  for (size_t i = 0; i < all.raw_xyz(0).size(); ++i) EXPECT_NEAR(first.raw_xyz(0)[i], all.raw_xyz(0)[i], 1e-9 * std::fabs(all.raw_xyz(0)[i]));
+  for (size_t i = 0; i < all.raw_spectral().size(); ++i)
+    EXPECT_NEAR(first.raw_spectral()[i], all.raw_spectral()[i], 1e-9 * std::fabs(all.raw_spectral()[i]));
+  Film other(2, 2, {"beauty", "fluorescence"}, ColorSpace::sRGB);
+  EXPECT_THROW(first.merge(other), std::invalid_argument);
+  // A moved film keeps its sums.
+  const Film moved = std::move(first);
+  EXPECT_NEAR(moved.raw_xyz(0)[(1 * 2 + 1) * 3 + 1], all.raw_xyz(0)[(1 * 2 + 1) * 3 + 1], 1e-9);
+}
