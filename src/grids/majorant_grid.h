@@ -1,0 +1,104 @@
+#pragma once
+// MajorantGrid: coarse cells over one or more VoxelGrids ("channels"), each
+// cell holding per channel the max and min of every value a lookup inside the
+// cell can return: the max / min over the voxels whose trilinear stencil
+// reaches the cell, dilated by one voxel (so nearest lookups and points that
+// rounding puts a hair outside the cell are covered too). An under-estimated
+// majorant would bias tracking silently; tests/tracking checks this bound.
+//
+// MajorantIterator walks the cells a ray crosses (3-D DDA, Amanatides & Woo)
+// and yields segments in the ray's own parameter t. Runs of cells whose maxima
+// are all zero come out merged as one segment, so empty space costs one step
+// per cell and nothing per unit length.
+#include <array>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include "core/vec.h"
+#include "grids/voxel_grid.h"
+
+namespace chlorovdb {
+
+// Grids a medium samples: pigment concentrations and a particle-scattering grid.
+inline constexpr int kMaxMajorantChannels = 5;
+
+struct MajorantSegment {
+  float t_min = 0.f, t_max = 0.f;  // in the parameter of the ray given to segments()
+  // Per channel: no lookup in (t_min, t_max) returns more than c_max or less than c_min.
+  std::array<float, kMaxMajorantChannels> c_max{}, c_min{};
+};
+
+class MajorantIterator;
+
+class MajorantGrid {
+ public:
+  MajorantGrid() = default;  // no channels: every ray is one segment
+  // The grid lives in the index space of channels[0] ("majorant index space");
+  // other channels may have other transforms (their bounds are then taken over
+  // each cell's bounding box in their own index space). Cells are cubes of
+  // voxels_per_cell voxels of channels[0] and cover every channel's support.
+  MajorantGrid(std::span<const VoxelGrid* const> channels, int voxels_per_cell);
+
+  // Segments covering [0, t_max] of a ray given in majorant index space.
+  inline MajorantIterator segments(const Ray& ray_index, float t_max) const;
+
+  int channels() const { return channels_; }
+  Coord resolution() const { return res_; }
+  int voxels_per_cell() const { return voxels_per_cell_; }
+  // The region the cells cover, in majorant index space; outside it every channel is its background.
+  Bounds3 index_bounds() const;
+  float cell_max(Coord cell, int channel) const { return bounds_[cell_index(cell) * stride() + channel]; }
+  float cell_min(Coord cell, int channel) const { return bounds_[cell_index(cell) * stride() + channels_ + channel]; }
+  size_t memory_bytes() const { return bounds_.size() * sizeof(float) + empty_.size(); }
+
+ private:
+  friend class MajorantIterator;
+  int stride() const { return 2 * channels_; }
+  size_t cell_index(Coord c) const { return c[0] + size_t(res_[0]) * (c[1] + size_t(res_[1]) * c[2]); }
+
+  int channels_ = 0;
+  int voxels_per_cell_ = 1;
+  Coord res_{0, 0, 0};
+  Vec3 origin_;                 // majorant index-space corner of cell (0,0,0)
+  float inv_cell_size_ = 1.f;   // 1 / voxels_per_cell
+  std::vector<float> bounds_;   // per cell: c_max[channels], then c_min[channels]
+  std::vector<uint8_t> empty_;  // per cell: every channel's max is 0
+  std::array<float, kMaxMajorantChannels> background_{};
+  bool background_empty_ = true;
+};
+
+class MajorantIterator {
+ public:
+  MajorantIterator() = default;  // yields nothing
+  MajorantIterator(const MajorantGrid* grid, const Ray& ray_index, float t_max);
+
+  // The next segment, or nullopt once [0, t_max] is covered.
+  std::optional<MajorantSegment> next();
+
+ private:
+  // A piece of the ray: one cell, or (cell < 0) a stretch outside the grid.
+  struct Piece {
+    float t0, t1;
+    int64_t cell;
+  };
+  bool pull(Piece* piece);
+  bool empty(const Piece& p) const { return p.cell < 0 ? grid_->background_empty_ : grid_->empty_[p.cell]; }
+  MajorantSegment segment(const Piece& p) const;
+
+  const MajorantGrid* grid_ = nullptr;
+  float t_max_ = 0.f;
+  float t_enter_ = 0.f, t_exit_ = 0.f;  // the ray inside the cells
+  enum class Stage : uint8_t { before, cells, after, done } stage_ = Stage::done;
+  // DDA state (cell coordinates).
+  Coord cell_{}, step_{}, stop_{};
+  float next_crossing_[3] = {}, delta_t_[3] = {};
+  float t_ = 0.f;
+  std::optional<Piece> pending_;
+};
+
+inline MajorantIterator MajorantGrid::segments(const Ray& ray_index, float t_max) const {
+  return MajorantIterator(this, ray_index, t_max);
+}
+
+}  // namespace chlorovdb

@@ -1,0 +1,219 @@
+// The one translation unit that includes OpenVDB.
+#include "grids/vdb_file.h"
+
+#include <mutex>
+
+#include <fmt/format.h>
+#include <openvdb/io/File.h>
+#include <openvdb/openvdb.h>
+
+#include "core/error.h"
+
+namespace chlorovdb {
+namespace {
+
+void initialize_openvdb() {
+  static std::once_flag once;
+  std::call_once(once, [] { openvdb::initialize(); });
+}
+
+std::unique_ptr<openvdb::io::File> open_vdb(const std::filesystem::path& path) {
+  initialize_openvdb();
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path.string(), "", "", "no such file");
+  auto file = std::make_unique<openvdb::io::File>(path.string());
+  try {
+    file->open();
+  } catch (const openvdb::Exception& e) {
+    throw InputError(path.string(), "", "", fmt::format("not a readable .vdb file ({})", e.what()));
+  }
+  return file;
+}
+
+// OpenVDB maps index to world with row vectors (world = index * M, translation
+// in the last row); core Transform uses column vectors.
+Transform::Mat to_mat(const openvdb::Mat4d& m) {
+  Transform::Mat r{};
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) r[i][j] = float(m(j, i));
+  return r;
+}
+
+openvdb::Mat4d to_vdb(const Transform::Mat& m) {
+  openvdb::Mat4d r;
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j) r(j, i) = m[i][j];
+  return r;
+}
+
+template <typename T>
+T meta_or(const openvdb::GridBase& grid, const std::string& key, T fallback) {
+  if (const auto m = grid.getMetadata<openvdb::TypedMetadata<T>>(key)) return m->value();
+  return fallback;
+}
+
+// World box around the cells of voxels [lo, hi] (the map may be singular here: no inverse needed).
+Bounds3 world_box(const Transform::Mat& m, Coord lo, Coord hi) {
+  Bounds3 b;
+  for (int c = 0; c < 8; ++c) {
+    const Vec3 p{c & 1 ? hi[0] + 0.5f : lo[0] - 0.5f, c & 2 ? hi[1] + 0.5f : lo[1] - 0.5f,
+                 c & 4 ? hi[2] + 0.5f : lo[2] - 0.5f};
+    Vec3 q;
+    for (int i = 0; i < 3; ++i) q[i] = m[i][0] * p.x + m[i][1] * p.y + m[i][2] * p.z + m[i][3];
+    b.extend(q);
+  }
+  return b;
+}
+
+template <typename GridT>
+void scan_values(const GridT& grid, GridInfo* info) {
+  using V = typename GridT::ValueType;
+  V mn{}, mx{};
+  bool any = false;
+  for (auto it = grid.cbeginValueAll(); it; ++it) {
+    const double v = double(*it);
+    const int64_t n = int64_t(it.getVoxelCount());
+    if (std::isnan(v)) info->invalid.nan += n;
+    else if (std::isinf(v)) info->invalid.inf += n;
+    else if (v < 0) info->invalid.negative += n;
+    if (!it.isValueOn()) continue;
+    if (!any || *it < mn) mn = *it;
+    if (!any || *it > mx) mx = *it;
+    any = true;
+  }
+  if (any) info->value_range = std::pair<double, double>(double(mn), double(mx));
+}
+
+}  // namespace
+
+VoxelGrid load_concentration_grid(const std::filesystem::path& path, std::string_view grid_name,
+                                  GridLoadOptions options) {
+  const std::string file_name = path.string();
+  auto file = open_vdb(path);
+  const std::string name(grid_name);
+  if (!file->hasGrid(name)) {
+    std::vector<std::string> names;
+    for (auto it = file->beginName(); it != file->endName(); ++it) names.push_back(*it);
+    std::string problem = names.empty() ? std::string("no such grid; the file holds no grids")
+                                        : fmt::format("no such grid; the file has: {}", fmt::join(names, ", "));
+    if (const std::string near = nearest_word(name, names); !near.empty())
+      problem += fmt::format(" (did you mean \"{}\"?)", near);
+    throw InputError(file_name, "grid", name, problem);
+  }
+  const openvdb::GridBase::Ptr base = file->readGrid(name);
+  const openvdb::FloatGrid::ConstPtr grid = openvdb::gridConstPtrCast<openvdb::FloatGrid>(base);
+  if (!grid)
+    throw InputError(file_name, "grid", name,
+                     fmt::format("is a {} grid; a concentration grid must hold float values", base->valueType()));
+  if (!grid->transform().isLinear())
+    throw InputError(file_name, "grid", name,
+                     "has a non-linear (frustum) transform; only affine index-to-world maps are supported");
+  Transform world_from_index;
+  try {
+    world_from_index = Transform::from_matrix(to_mat(grid->transform().baseMap()->getAffineMap()->getMat4()));
+  } catch (const std::domain_error&) {
+    throw InputError(file_name, "grid", name, "has a singular index-to-world transform");
+  }
+
+  // Every voxel a lookup can see differ from the background: active voxels and
+  // tiles, and the inactive voxels that leaf nodes store.
+  openvdb::CoordBBox box = grid->evalActiveVoxelBoundingBox();
+  openvdb::CoordBBox leaves;
+  if (grid->tree().evalLeafBoundingBox(leaves)) box.expand(leaves);
+  const bool empty = box.empty();
+  const Coord lo = empty ? Coord{0, 0, 0} : Coord{box.min().x(), box.min().y(), box.min().z()};
+  const Coord hi = empty ? Coord{-1, -1, -1} : Coord{box.max().x(), box.max().y(), box.max().z()};
+
+  GridMetadata meta;
+  meta.name = name;
+  meta.file = file_name;
+  meta.unit = meta_or<std::string>(*grid, "unit", "");
+  meta.scale = meta_or<float>(*grid, "scale", float(meta_or<double>(*grid, "scale", 1.0)));
+  meta.provenance = meta_or<std::string>(*grid, "provenance", "");
+
+  const openvdb::FloatTree& tree = grid->tree();
+  // Unregistered accessors: the tree outlives them and is not modified meanwhile.
+  using UnsafeAccessor = openvdb::tree::ValueAccessor<const openvdb::FloatTree, false>;
+  const float background = tree.background();
+  // A brick [o, o+8]^3 touches the eight leaf-sized regions at o + {0, 8}^3;
+  // where there is no leaf the whole region holds one (tile or background) value.
+  auto may_hold_data = [&](Coord o) {
+    UnsafeAccessor acc(tree);
+    for (int c = 0; c < 8; ++c) {
+      const openvdb::Coord q(o[0] + (c & 1 ? 8 : 0), o[1] + (c & 2 ? 8 : 0), o[2] + (c & 4 ? 8 : 0));
+      if (acc.probeConstLeaf(q) || acc.getValue(q) != background) return true;
+    }
+    return false;
+  };
+  auto fill = [&](Coord o, float* v) {
+    UnsafeAccessor acc(tree);
+    for (int z = 0; z < VoxelGrid::kBrickStride; ++z)
+      for (int y = 0; y < VoxelGrid::kBrickStride; ++y)
+        for (int x = 0; x < VoxelGrid::kBrickStride; ++x)
+          v[x + VoxelGrid::kBrickStride * (y + VoxelGrid::kBrickStride * z)] =
+              acc.getValue(openvdb::Coord(o[0] + x, o[1] + y, o[2] + z));
+  };
+  return VoxelGrid::from_bricks(lo, hi, background, world_from_index, std::move(meta), may_hold_data, fill,
+                                options.clamp_invalid);
+}
+
+void write_concentration_grids(const std::filesystem::path& path, std::span<const DenseGrid> grids) {
+  initialize_openvdb();
+  openvdb::GridPtrVec out;
+  for (const DenseGrid& d : grids) {
+    auto grid = openvdb::FloatGrid::create(d.background);
+    grid->setName(d.metadata.name);
+    grid->setGridClass(openvdb::GRID_FOG_VOLUME);
+    grid->setTransform(openvdb::math::Transform::createLinearTransform(to_vdb(d.world_from_index.matrix())));
+    auto acc = grid->getAccessor();
+    for (int z = 0; z < d.dims[2]; ++z)
+      for (int y = 0; y < d.dims[1]; ++y)
+        for (int x = 0; x < d.dims[0]; ++x)
+          if (const float v = d.at(x, y, z); !(v == d.background))  // NaN is kept: the loader must see it
+            acc.setValue(openvdb::Coord(d.origin[0] + x, d.origin[1] + y, d.origin[2] + z), v);
+    grid->tree().prune();
+    if (!d.metadata.unit.empty()) grid->insertMeta("unit", openvdb::StringMetadata(d.metadata.unit));
+    grid->insertMeta("scale", openvdb::FloatMetadata(d.metadata.scale));
+    if (!d.metadata.provenance.empty())
+      grid->insertMeta("provenance", openvdb::StringMetadata(d.metadata.provenance));
+    out.push_back(grid);
+  }
+  try {
+    openvdb::io::File file(path.string());
+    file.write(out);
+    file.close();
+  } catch (const openvdb::Exception& e) {
+    throw InputError(path.string(), "", "", fmt::format("cannot write .vdb file ({})", e.what()));
+  }
+}
+
+GridReport inspect_vdb(const std::filesystem::path& path) {
+  auto file = open_vdb(path);
+  GridReport report;
+  report.file = path.string();
+  for (auto it = file->beginName(); it != file->endName(); ++it) {
+    const openvdb::GridBase::Ptr grid = file->readGrid(*it);
+    GridInfo info;
+    info.name = *it;
+    info.type = grid->valueType();
+    info.grid_class = openvdb::GridBase::gridClassToString(grid->getGridClass());
+    info.linear_transform = grid->transform().isLinear();
+    info.world_from_index = to_mat(grid->transform().baseMap()->getAffineMap()->getMat4());
+    const openvdb::Vec3d vs = grid->voxelSize();
+    info.voxel_size = Vec3(float(vs.x()), float(vs.y()), float(vs.z()));
+    if (const openvdb::CoordBBox b = grid->evalActiveVoxelBoundingBox(); !b.empty()) {
+      const Coord lo{b.min().x(), b.min().y(), b.min().z()}, hi{b.max().x(), b.max().y(), b.max().z()};
+      info.active_index_bounds = std::pair(lo, hi);
+      info.active_world_bounds = world_box(info.world_from_index, lo, hi);
+    }
+    info.active_voxels = int64_t(grid->activeVoxelCount());
+    info.memory_bytes = int64_t(grid->memUsage());
+    if (const auto f = openvdb::gridConstPtrCast<openvdb::FloatGrid>(grid)) scan_values(*f, &info);
+    else if (const auto d = openvdb::gridConstPtrCast<openvdb::DoubleGrid>(grid)) scan_values(*d, &info);
+    for (auto m = grid->beginMeta(); m != grid->endMeta(); ++m) info.metadata.emplace_back(m->first, m->second->str());
+    report.grids.push_back(std::move(info));
+  }
+  return report;
+}
+
+}  // namespace chlorovdb

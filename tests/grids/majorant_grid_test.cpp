@@ -1,0 +1,153 @@
+#include <gtest/gtest.h>
+
+#include <vector>
+
+#include "core/rng.h"
+#include "core/sampling.h"
+#include "grids/majorant_grid.h"
+
+using namespace chlorovdb;
+
+namespace {
+
+// Mostly empty, with isolated spikes and a few dense blocks: the features a
+// majorant built without the stencil dilation would miss.
+DenseGrid spiky_grid(Coord dims, uint64_t seed) {
+  DenseGrid d(dims);
+  Rng rng(seed, 0);
+  for (float& v : d.values)
+    if (rng.uniform() < 0.01f) v = 100.f * rng.uniform();
+  for (int b = 0; b < 3; ++b) {
+    const int x0 = int(rng.uniform() * float(dims[0] - 6)), y0 = int(rng.uniform() * float(dims[1] - 6)),
+              z0 = int(rng.uniform() * float(dims[2] - 6));
+    for (int z = z0; z < z0 + 5; ++z)
+      for (int y = y0; y < y0 + 5; ++y)
+        for (int x = x0; x < x0 + 5; ++x) d.at(x, y, z) = 5.f + rng.uniform();
+  }
+  return d;
+}
+
+Ray random_ray(const Bounds3& box, Rng& rng, bool axis_parallel) {
+  const Vec3 size = box.diagonal();
+  Vec3 o;
+  for (int a = 0; a < 3; ++a) o[a] = box.lo[a] - 0.5f * size[a] + 2.f * size[a] * rng.uniform();
+  Vec3 d = sample_uniform_sphere({rng.uniform(), rng.uniform()});
+  if (axis_parallel) {
+    const int a = int(rng.uniform() * 3.f);
+    d = Vec3(0.f);
+    d[a] = rng.uniform() < 0.5f ? -1.f : 1.f;
+  }
+  return {o, d * (0.5f + rng.uniform())};  // not unit length: t is the ray's own parameter
+}
+
+std::vector<MajorantSegment> collect(const MajorantGrid& m, const Ray& r, float t_max) {
+  std::vector<MajorantSegment> s;
+  auto it = m.segments(r, t_max);
+  while (auto seg = it.next()) s.push_back(*seg);
+  return s;
+}
+
+}  // namespace
+
+TEST(MajorantGrid, SegmentsTileTheRayExactly) {
+  const VoxelGrid g = VoxelGrid::from_dense(spiky_grid({40, 33, 27}, 1));
+  const VoxelGrid* channels[] = {&g};
+  const MajorantGrid m(channels, 8);
+  Rng rng(2, 0);
+  for (int i = 0; i < 5000; ++i) {
+    const Ray r = random_ray(g.index_bounds(), rng, i % 4 == 0);
+    const float t_max = 200.f * rng.uniform();
+    const auto segs = collect(m, r, t_max);
+    ASSERT_FALSE(segs.empty());
+    EXPECT_EQ(segs.front().t_min, 0.f);
+    EXPECT_EQ(segs.back().t_max, t_max);
+    for (size_t s = 0; s < segs.size(); ++s) {
+      EXPECT_LE(segs[s].t_min, segs[s].t_max);
+      if (s > 0) EXPECT_EQ(segs[s].t_min, segs[s - 1].t_max);
+    }
+  }
+}
+
+TEST(MajorantGrid, NoLookupExceedsItsSegmentBounds) {
+  const DenseGrid d0 = spiky_grid({37, 29, 41}, 3);
+  // A second channel with its own (rotated, non-uniformly scaled) index space.
+  DenseGrid d1 = spiky_grid({20, 25, 15}, 4);
+  d1.world_from_index = Transform::translate({3.f, -2.f, 5.f}) * Transform::rotate(37.f, {1, 1, 0}) *
+                        Transform::scale({1.7f, 0.8f, 2.3f});
+  const VoxelGrid g0 = VoxelGrid::from_dense(d0), g1 = VoxelGrid::from_dense(d1);
+  const Transform g1_from_g0 = g1.index_from_world() * g0.world_from_index();
+  const VoxelGrid* channels[] = {&g0, &g1};
+  Rng rng(5, 0);
+  int64_t checked = 0;
+  for (int voxels_per_cell : {1, 3, 8, 16}) {
+    const MajorantGrid m(channels, voxels_per_cell);
+    for (int i = 0; i < 3000; ++i) {
+      const Ray r = random_ray(m.index_bounds(), rng, i % 5 == 0);
+      for (const MajorantSegment& s : collect(m, r, 150.f)) {
+        for (int k = 0; k < 24; ++k) {
+          // The end points too: lookups there belong to both neighbours.
+          const float u = k == 0 ? 0.f : (k == 1 ? 1.f : rng.uniform());
+          const Vec3 p = r.at(s.t_min + u * (s.t_max - s.t_min));
+          const Vec3 p1 = g1_from_g0.point(p);
+          for (Interpolation mode : {Interpolation::trilinear, Interpolation::nearest}) {
+            const float v0 = g0.lookup(p, mode), v1 = g1.lookup(p1, mode);
+            ASSERT_LE(v0, s.c_max[0]) << "cell size " << voxels_per_cell;
+            ASSERT_GE(v0, s.c_min[0]) << "cell size " << voxels_per_cell;
+            ASSERT_LE(v1, s.c_max[1]) << "cell size " << voxels_per_cell;
+            ASSERT_GE(v1, s.c_min[1]) << "cell size " << voxels_per_cell;
+            ++checked;
+          }
+        }
+      }
+    }
+  }
+  EXPECT_GT(checked, 1000000);
+}
+
+TEST(MajorantGrid, EmptyRunsComeOutAsOneSegment) {
+  DenseGrid d({128, 16, 16});
+  for (int x : {20, 100}) d.at(x, 8, 8) = 1.f;  // two isolated voxels along one line
+  const VoxelGrid g = VoxelGrid::from_dense(d);
+  const VoxelGrid* channels[] = {&g};
+  const MajorantGrid m(channels, 4);
+  const auto segs = collect(m, Ray{{-50.f, 8.f, 8.f}, {1.f, 0.f, 0.f}}, 300.f);
+  // empty | cells around x = 20 | empty | cells around x = 100 | empty
+  int empty_runs = 0;
+  for (size_t s = 0; s < segs.size(); ++s) {
+    const bool empty = segs[s].c_max[0] == 0.f;
+    if (empty) ++empty_runs;
+    if (s > 0) EXPECT_FALSE(empty && segs[s - 1].c_max[0] == 0.f) << "two empty segments in a row";
+  }
+  EXPECT_EQ(empty_runs, 3);
+  EXPECT_LE(segs.size(), 3u + 2u * 3u);  // the stencil of one voxel reaches at most 3 cells of 4
+}
+
+TEST(MajorantGrid, RayOnCellBoundaryPlanesAndMissingRays) {
+  const VoxelGrid g = VoxelGrid::from_dense(spiky_grid({32, 32, 32}, 6));
+  const VoxelGrid* channels[] = {&g};
+  const MajorantGrid m(channels, 8);
+  const Bounds3 b = m.index_bounds();
+  // Exactly on the planes between cells, along each axis and both directions.
+  for (int a = 0; a < 3; ++a)
+    for (float dir : {-1.f, 1.f}) {
+      Vec3 o = b.lo + Vec3(8.f, 8.f, 8.f), d(0.f);
+      o[a] = dir > 0 ? b.lo[a] - 5.f : b.hi[a] + 5.f;
+      d[a] = dir;
+      const auto segs = collect(m, {o, d}, 100.f);
+      EXPECT_EQ(segs.back().t_max, 100.f);
+      for (size_t s = 1; s < segs.size(); ++s) EXPECT_EQ(segs[s].t_min, segs[s - 1].t_max);
+    }
+  // A ray that misses the grid: one empty segment.
+  const auto miss = collect(m, {b.hi + Vec3(10.f), {1.f, 0.f, 0.f}}, 50.f);
+  ASSERT_EQ(miss.size(), 1u);
+  EXPECT_EQ(miss[0].t_max, 50.f);
+  EXPECT_EQ(miss[0].c_max[0], 0.f);
+}
+
+TEST(MajorantGrid, WithoutChannelsTheRayIsOneSegment) {
+  const MajorantGrid m;
+  const auto segs = collect(m, {{0, 0, 0}, {1, 0, 0}}, 7.f);
+  ASSERT_EQ(segs.size(), 1u);
+  EXPECT_EQ(segs[0].t_min, 0.f);
+  EXPECT_EQ(segs[0].t_max, 7.f);
+}

@@ -1,0 +1,163 @@
+// Round trips through real .vdb files. OpenVDB itself is included only to
+// write a grid of the wrong type, which write_concentration_grid cannot make.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <functional>
+
+#include <openvdb/io/File.h>
+#include <openvdb/openvdb.h>
+
+#include "core/error.h"
+#include "core/rng.h"
+#include "grids/vdb_file.h"
+
+using namespace chlorovdb;
+
+namespace {
+
+std::filesystem::path temp_path(const std::string& name) {
+  const auto dir = std::filesystem::temp_directory_path() / "chlorovdb_test_grids";
+  std::filesystem::create_directories(dir);
+  return dir / name;
+}
+
+DenseGrid test_grid(const std::string& name) {
+  DenseGrid d({13, 7, 9});
+  d.origin = {-4, 10, 2};
+  d.metadata.name = name;
+  d.metadata.unit = "uM";
+  d.metadata.scale = 2.5f;
+  d.metadata.provenance = "vdb_file_test";
+  // Non-uniform scale, a rotation and a translation.
+  d.world_from_index = Transform::translate({0.5f, -1.f, 2.f}) * Transform::rotate(30.f, {1, 2, 3}) *
+                       Transform::scale({0.01f, 0.02f, 0.005f});
+  Rng rng(11, 0);
+  for (float& v : d.values) v = rng.uniform() < 0.5f ? 0.f : rng.uniform();
+  return d;
+}
+
+std::string error_of(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "(no InputError)";
+}
+
+}  // namespace
+
+TEST(VdbFile, RoundTripKeepsValuesTransformAndMetadata) {
+  const DenseGrid a = test_grid("chlorophyll_a"), b = test_grid("chlorophyll_b");
+  const auto path = temp_path("roundtrip.vdb");
+  const DenseGrid both[] = {a, b};
+  write_concentration_grids(path, both);
+
+  const VoxelGrid loaded = load_concentration_grid(path, "chlorophyll_a");
+  const VoxelGrid direct = VoxelGrid::from_dense(a);
+  EXPECT_EQ(loaded.metadata().unit, "uM");
+  EXPECT_EQ(loaded.metadata().scale, 2.5f);
+  EXPECT_EQ(loaded.metadata().provenance, "vdb_file_test");
+  EXPECT_EQ(loaded.metadata().file, path.string());
+  for (int i = 0; i < 4; ++i)
+    for (int j = 0; j < 4; ++j)
+      EXPECT_NEAR(loaded.world_from_index().matrix()[i][j], a.world_from_index.matrix()[i][j], 1e-6f);
+  Rng rng(12, 0);
+  for (int i = 0; i < 20000; ++i) {
+    const Vec3 p{-6.f + 17.f * rng.uniform(), 8.f + 11.f * rng.uniform(), 0.f + 13.f * rng.uniform()};
+    // The file's leaf-aligned bounds shift the bricks, which may change the last bit.
+    ASSERT_NEAR(loaded.trilinear(p), direct.trilinear(p), 1e-5f);
+  }
+  for (int z = -2; z < 13; ++z)
+    for (int y = 8; y < 19; ++y)
+      for (int x = -6; x < 11; ++x) ASSERT_EQ(loaded.voxel(x, y, z), direct.voxel(x, y, z));
+  // World -> index of a voxel centre lands on its integer index.
+  const Vec3 q = loaded.index_from_world().point(a.world_from_index.point({3, 12, 5}));
+  EXPECT_NEAR(q.x, 3.f, 1e-3f);
+  EXPECT_NEAR(q.y, 12.f, 1e-3f);
+  EXPECT_NEAR(q.z, 5.f, 1e-3f);
+}
+
+TEST(VdbFile, MissingFileAndGridAreNamed) {
+  EXPECT_NE(error_of([] { load_concentration_grid(temp_path("nope.vdb"), "x"); }).find("no such file"),
+            std::string::npos);
+  const auto path = temp_path("names.vdb");
+  write_concentration_grid(path, test_grid("chlorophyll_a"));
+  const std::string msg = error_of([&] { load_concentration_grid(path, "chlorophyl_a"); });
+  EXPECT_NE(msg.find("names.vdb"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("the file has: chlorophyll_a"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("did you mean \"chlorophyll_a\""), std::string::npos) << msg;
+}
+
+TEST(VdbFile, NotAVdbFileIsRefused) {
+  const auto path = temp_path("garbage.vdb");
+  { std::ofstream(path) << "not a vdb"; }
+  EXPECT_NE(error_of([&] { load_concentration_grid(path, "x"); }).find("not a readable .vdb"), std::string::npos);
+}
+
+TEST(VdbFile, WrongTypeIsRefused) {
+  openvdb::initialize();
+  auto grid = openvdb::Vec3SGrid::create();
+  grid->setName("velocity");
+  grid->tree().setValue(openvdb::Coord(1, 2, 3), openvdb::Vec3s(1, 0, 0));
+  const auto path = temp_path("vec3.vdb");
+  openvdb::io::File(path.string()).write({grid});
+  const std::string msg = error_of([&] { load_concentration_grid(path, "velocity"); });
+  EXPECT_NE(msg.find("velocity"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("vec3s"), std::string::npos) << msg;
+  EXPECT_EQ(inspect_vdb(path).grids.at(0).type, "vec3s");
+}
+
+TEST(VdbFile, InvalidValuesAreRefusedOrClamped) {
+  DenseGrid d = test_grid("chl");
+  d.at(1, 1, 1) = std::nanf("");
+  d.at(2, 1, 1) = -0.5f;
+  const auto path = temp_path("invalid.vdb");
+  write_concentration_grid(path, d);
+  const std::string msg = error_of([&] { load_concentration_grid(path, "chl"); });
+  EXPECT_NE(msg.find("invalid.vdb"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("1 NaN, 0 infinite and 1 negative"), std::string::npos) << msg;
+  const VoxelGrid g = load_concentration_grid(path, "chl", {.clamp_invalid = true});
+  EXPECT_EQ(g.metadata().clamped_voxels, 2);
+  EXPECT_EQ(g.voxel(d.origin[0] + 1, d.origin[1] + 1, d.origin[2] + 1), 0.f);
+
+  const GridReport report = inspect_vdb(path);
+  ASSERT_EQ(report.grids.size(), 1u);
+  EXPECT_EQ(report.grids[0].invalid.nan, 1);
+  EXPECT_EQ(report.grids[0].invalid.negative, 1);
+}
+
+TEST(VdbFile, InspectDescribesEveryGrid) {
+  DenseGrid a({8, 8, 8}, 0.f);
+  a.metadata.name = "blob";
+  a.origin = {10, 20, 30};
+  a.world_from_index = Transform::scale({0.5f, 0.25f, 2.f});
+  a.at(2, 3, 4) = 7.f;
+  a.at(5, 3, 4) = 1.f;
+  const auto path = temp_path("inspect.vdb");
+  write_concentration_grid(path, a);
+  const GridReport r = inspect_vdb(path);
+  ASSERT_EQ(r.grids.size(), 1u);
+  const GridInfo& g = r.grids[0];
+  EXPECT_EQ(g.name, "blob");
+  EXPECT_EQ(g.type, "float");
+  EXPECT_EQ(g.active_voxels, 2);
+  ASSERT_TRUE(g.active_index_bounds);
+  EXPECT_EQ(g.active_index_bounds->first, (Coord{12, 23, 34}));
+  EXPECT_EQ(g.active_index_bounds->second, (Coord{15, 23, 34}));
+  ASSERT_TRUE(g.value_range);
+  EXPECT_EQ(g.value_range->first, 1.0);
+  EXPECT_EQ(g.value_range->second, 7.0);
+  EXPECT_NEAR(g.voxel_size.x, 0.5f, 1e-6f);
+  EXPECT_NEAR(g.voxel_size.y, 0.25f, 1e-6f);
+  EXPECT_NEAR(g.voxel_size.z, 2.f, 1e-6f);
+  EXPECT_NEAR(g.active_world_bounds.lo.x, 11.5f * 0.5f, 1e-5f);
+  EXPECT_NEAR(g.active_world_bounds.hi.z, 34.5f * 2.f, 1e-5f);
+  EXPECT_GT(g.memory_bytes, 0);
+  EXPECT_EQ(g.invalid.total(), 0);
+  bool has_unit_scale = false;
+  for (const auto& [k, v] : g.metadata) has_unit_scale |= k == "scale";
+  EXPECT_TRUE(has_unit_scale);
+}
