@@ -56,6 +56,11 @@ class SampledSpectrum {
     for (int i = 0; i < kMaxWavelengths; ++i) r.v_[i] = b.v_[i] != 0.f ? a.v_[i] / b.v_[i] : 0.f;
     return r;
   }
+  friend SampledSpectrum clamp_zero(const SampledSpectrum& a) {
+    SampledSpectrum r;
+    for (int i = 0; i < kMaxWavelengths; ++i) r.v_[i] = std::max(0.f, a.v_[i]);
+    return r;
+  }
   friend SampledSpectrum exp_neg(const SampledSpectrum& a) {  // e^{-a}
     SampledSpectrum r;
     for (int i = 0; i < kMaxWavelengths; ++i) r.v_[i] = std::exp(-a.v_[i]);
