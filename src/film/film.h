@@ -30,6 +30,9 @@ class Film {
   int height() const { return height_; }
   const std::vector<std::string>& layer_names() const { return layer_names_; }
   ColorSpace color_space() const { return color_space_; }
+  float spectral_min_nm() const { return spectral_min_nm_; }
+  float spectral_max_nm() const { return spectral_max_nm_; }
+  int spectral_bins() const { return spectral_bins_; }
 
   // Bins of equal width over [lambda_min, lambda_max) nm for the beauty layer.
   void enable_spectral(float lambda_min_nm, float lambda_max_nm, int bins);
