@@ -1,0 +1,132 @@
+#include "media/medium.h"
+
+#include <cmath>
+#include <fmt/format.h>
+
+#include "core/error.h"
+
+namespace chlorovdb {
+namespace {
+
+void check_field(const Field& f, const std::string& where, const std::string& key) {
+  if (f.grid) {
+    if (!(f.scale >= 0.f) || !std::isfinite(f.scale))
+      throw InputError(where, key + ".scale", fmt::format("{}", f.scale), "must be finite and >= 0");
+  } else if (!(f.value >= 0.f) || !std::isfinite(f.value)) {
+    throw InputError(where, key, fmt::format("{}", f.value), "must be finite and >= 0");
+  }
+}
+
+}  // namespace
+
+Medium::Medium(MediumDesc desc) : desc_(std::move(desc)) {
+  const std::string& where = desc_.where;
+  if (desc_.pigments.size() > size_t(kMaxPigments))
+    throw InputError(where, "pigments", fmt::format("{} pigments", desc_.pigments.size()),
+                     fmt::format("a medium holds at most {}", kMaxPigments));
+  if (desc_.majorant_voxels_per_cell < 1)
+    throw InputError(where, "majorant_voxels_per_cell", fmt::format("{}", desc_.majorant_voxels_per_cell),
+                     "must be >= 1");
+  if (const auto* hg = std::get_if<HenyeyGreenstein>(&desc_.particle_phase); hg && !(std::fabs(hg->g) < 1.f))
+    throw InputError(where, "particles.g", fmt::format("{}", hg->g), "must be in (-1, 1)");
+
+  // One channel per distinct grid, so a grid shared by several fields is looked up once.
+  auto channel_of = [&](const Field& f) {
+    if (!f.grid) return -1;
+    for (size_t c = 0; c < channels_.size(); ++c)
+      if (channels_[c].grid == f.grid.get()) return int(c);
+    channels_.push_back({f.grid.get(), true, Transform()});
+    return int(channels_.size()) - 1;
+  };
+  for (size_t k = 0; k < desc_.pigments.size(); ++k) {
+    const PigmentInMedium& p = desc_.pigments[k];
+    const std::string key = fmt::format("pigments[{}]", k);
+    validate(p.pigment, where, key);
+    check_field(p.concentration, where, key + ".concentration");
+    pigment_channel_[k] = channel_of(p.concentration);
+    pigment_scale_[k] = p.concentration.scale;
+    pigment_constant_[k] = p.concentration.value;
+  }
+  if (desc_.solvent.rayleigh && !(desc_.solvent.eta(550.f) >= 1.f))
+    throw InputError(where, "solvent.eta", desc_.solvent.eta.source(),
+                     "molecular scattering needs the solvent's refractive index (>= 1)");
+  check_field(desc_.particle_sigma_s, where, "particles.sigma_s");
+  particle_channel_ = channel_of(desc_.particle_sigma_s);
+  if (channels_.empty()) return;
+
+  // The medium's index space is that of its first grid.
+  world_from_index_ = channels_[0].grid->world_from_index();
+  index_from_world_ = channels_[0].grid->index_from_world();
+  std::vector<const VoxelGrid*> grids;
+  for (Channel& c : channels_) {
+    c.grid_from_medium_index = c.grid->index_from_world() * world_from_index_;
+    c.same_space = c.grid_from_medium_index.is_identity();
+    grids.push_back(c.grid);
+  }
+  majorants_ = MajorantGrid(grids, desc_.majorant_voxels_per_cell);
+}
+
+std::optional<Medium::GridRegion> Medium::grid_region() const {
+  if (homogeneous()) return std::nullopt;
+  Bounds3 b;
+  for (const Channel& c : channels_) {
+    const Bounds3 g = c.grid->index_bounds();
+    if (g.empty()) continue;
+    const Transform medium_from_grid = c.grid_from_medium_index.inverse();
+    for (int i = 0; i < 8; ++i)
+      b.extend(medium_from_grid.point({i & 1 ? g.hi.x : g.lo.x, i & 2 ? g.hi.y : g.lo.y, i & 4 ? g.hi.z : g.lo.z}));
+  }
+  return GridRegion{b, world_from_index_};
+}
+
+PreparedMedium prepare(const Medium& medium, const SampledWavelengths& lambda) {
+  const MediumDesc& d = medium.desc_;
+  PreparedMedium pm;
+  pm.lambda_count = lambda.count();
+  // Grey quantities fill only the lanes the path carries.
+  SampledSpectrum lanes;
+  for (int i = 0; i < lambda.count(); ++i) lanes[i] = 1.f;
+
+  pm.sigma_a_constant = d.solvent.absorption.sample(lambda);
+  if (d.solvent.rayleigh) {
+    const SampledSpectrum eta = d.solvent.eta.sample(lambda);
+    for (int i = 0; i < lambda.count(); ++i)
+      pm.sigma_s_molecular[i] = water_rayleigh_sigma_s(lambda[i], eta[i], d.solvent.temperature_K);
+  }
+  for (size_t k = 0; k < d.pigments.size(); ++k) {
+    pm.sigma_a_per_molar[k] = d.pigments[k].pigment.epsilon.sample(lambda) * kAbsorptionPerMolarExtinction;
+    const int c = medium.pigment_channel_[k];
+    if (c < 0) pm.sigma_a_constant += pm.sigma_a_per_molar[k] * medium.pigment_constant_[k];
+    else pm.channel_sigma_t[c] += pm.sigma_a_per_molar[k] * medium.pigment_scale_[k];
+  }
+  if (medium.particle_channel_ < 0) {
+    pm.sigma_s_particle_constant = lanes * d.particle_sigma_s.value;
+  } else {
+    pm.sigma_s_particle_per_value = lanes * d.particle_sigma_s.scale;
+    pm.channel_sigma_t[medium.particle_channel_] += pm.sigma_s_particle_per_value;
+  }
+  pm.sigma_t_constant = pm.sigma_a_constant + pm.sigma_s_molecular + pm.sigma_s_particle_constant;
+  return pm;
+}
+
+MediumProperties Medium::properties(const Vec3& p_index, const PreparedMedium& prepared) const {
+  float v[kMaxMajorantChannels];
+  lookup_channels(p_index, v);
+  MediumProperties mp;
+  mp.sigma_a = prepared.sigma_a_constant;
+  for (int k = 0; k < pigment_count(); ++k) {
+    const int c = pigment_channel_[k];
+    const float concentration = c < 0 ? pigment_constant_[k] : v[c] * pigment_scale_[k];
+    mp.concentration[k] = concentration;
+    mp.sigma_a_pigment[k] = prepared.sigma_a_per_molar[k] * concentration;
+    if (c >= 0) mp.sigma_a += mp.sigma_a_pigment[k];  // constant pigments are in sigma_a_constant already
+  }
+  const SampledSpectrum sigma_s_particle = particle_channel_ < 0
+                                               ? prepared.sigma_s_particle_constant
+                                               : prepared.sigma_s_particle_per_value * v[particle_channel_];
+  mp.sigma_s = prepared.sigma_s_molecular + sigma_s_particle;
+  mp.phase = {desc_.particle_phase, safe_div(sigma_s_particle, mp.sigma_s)};
+  return mp;
+}
+
+}  // namespace chlorovdb

@@ -1,0 +1,176 @@
+#pragma once
+// A participating medium: a solvent, up to kMaxPigments dissolved pigments
+// (each a concentration grid or a constant) and optional particle scattering
+// (a grid or a constant, with its own phase function). PHYSICS.md §1, §2, §6:
+//   sigma_a(x, l) = zeta_solvent(l) + sum_k 100 ln10 eps_k(l) c_k(x)
+//   sigma_s(x, l) = sigma_s,Rayleigh(l) + sigma_s,particle(x)
+// Units: concentrations mol/L, coefficients 1/m, lengths metres.
+//
+// Use: once per path (per set of wavelengths) `prepare`, which evaluates every
+// spectrum at the path's wavelengths; then a collision costs one lookup per
+// distinct grid and a few multiply-adds per lane (sample_point). Tracking
+// (tracking/) walks majorant segments through `majorants`.
+//
+// A medium covers whatever ray segment [0, t_max] it is given: the scene decides
+// its region (inside a closed mesh, or the grid's own bounds: grid_region()).
+// A medium with no grid is homogeneous: one segment, and the closed-form
+// transmittance applies.
+#include <array>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "core/transform.h"
+#include "core/vec.h"
+#include "grids/majorant_grid.h"
+#include "grids/voxel_grid.h"
+#include "media/medium_phase.h"
+#include "media/phase.h"
+#include "media/pigment.h"
+#include "media/solvent.h"
+#include "spectra/sampled.h"
+
+namespace chlorovdb {
+
+// Majorant cell edge in voxels; docs/performance-grids.md has the measurement that chose it.
+inline constexpr int kDefaultMajorantVoxelsPerCell = 8;
+
+// A scalar field: a grid, or a constant everywhere.
+struct Field {
+  std::shared_ptr<const VoxelGrid> grid;  // null: the field is `value` everywhere
+  float value = 0.f;                      // the constant (internal unit), when grid is null
+  float scale = 1.f;                      // grid value * scale = the field in its internal unit
+
+  static Field constant(float value) { return {nullptr, value, 1.f}; }
+  static Field from_grid(std::shared_ptr<const VoxelGrid> grid, float scale) { return {std::move(grid), 0.f, scale}; }
+};
+
+struct PigmentInMedium {
+  Pigment pigment;
+  Field concentration;  // mol/L (the scale folds in the grid's unit, e.g. 1e-6 for uM)
+};
+
+struct MediumDesc {
+  std::string where;  // for error messages, e.g. "scene.json: media.leaf"
+  Solvent solvent;
+  std::vector<PigmentInMedium> pigments;  // at most kMaxPigments
+  Field particle_sigma_s;                 // 1/m, the same at every wavelength; constant 0: no particles
+  PhaseFunction particle_phase = HenyeyGreenstein{0.f};
+  Interpolation interpolation = Interpolation::trilinear;
+  int majorant_voxels_per_cell = kDefaultMajorantVoxelsPerCell;
+};
+
+// Coefficients at one point, for the wavelengths of a PreparedMedium.
+struct MediumProperties {
+  SampledSpectrum sigma_a;  // 1/m: solvent + pigments
+  SampledSpectrum sigma_s;  // 1/m: molecules + particles
+  std::array<SampledSpectrum, kMaxPigments> sigma_a_pigment;  // each pigment's part of sigma_a
+  std::array<float, kMaxPigments> concentration{};            // mol/L
+  MediumPhase phase;
+};
+
+// A medium's spectra evaluated at one path's wavelengths (prepare()).
+struct PreparedMedium {
+  int lambda_count = 0;
+  SampledSpectrum sigma_a_constant;           // solvent + constant pigments
+  SampledSpectrum sigma_s_molecular;          // Rayleigh
+  SampledSpectrum sigma_s_particle_constant;  // constant particles (0 if they come from a grid)
+  SampledSpectrum sigma_s_particle_per_value; // per unit value of the particle grid
+  std::array<SampledSpectrum, kMaxPigments> sigma_a_per_molar;  // 100 ln10 eps_k(l): 1/m per mol/L
+  // sigma_t = sigma_t_constant + sum over grids ("channels") of channel_sigma_t * value.
+  SampledSpectrum sigma_t_constant;
+  std::array<SampledSpectrum, kMaxMajorantChannels> channel_sigma_t;
+
+  // Per-wavelength bounds of sigma_t over a majorant segment (PHYSICS §6):
+  // sigma_maj = zeta + 100 ln10 sum_k eps_k c_max,k + sigma_s,max; sigma_min likewise with c_min.
+  SampledSpectrum sigma_maj(const MajorantSegment& s, int channels) const {
+    SampledSpectrum r = sigma_t_constant;
+    for (int c = 0; c < channels; ++c) r += channel_sigma_t[c] * s.c_max[c];
+    return r;
+  }
+  SampledSpectrum sigma_min(const MajorantSegment& s, int channels) const {
+    SampledSpectrum r = sigma_t_constant;
+    for (int c = 0; c < channels; ++c) r += channel_sigma_t[c] * s.c_min[c];
+    return r;
+  }
+};
+
+class Medium {
+ public:
+  // Validates (InputError naming desc.where) and builds the majorant grid over
+  // the distinct grids (a grid shared by several fields is looked up once).
+  explicit Medium(MediumDesc desc);
+
+  const MediumDesc& desc() const { return desc_; }
+  bool homogeneous() const { return channels_.empty(); }
+  int pigment_count() const { return int(desc_.pigments.size()); }
+  const MajorantGrid& majorant_grid() const { return majorants_; }
+  int channels() const { return int(channels_.size()); }
+
+  // The grids' region for media bounded by their grids: a box in the grid
+  // index space (the union of every grid's voxel cells) and its transform to
+  // world. None for homogeneous media.
+  struct GridRegion {
+    Bounds3 index_bounds;
+    Transform world_from_index;
+  };
+  std::optional<GridRegion> grid_region() const;
+
+  // --- For tracking (tracking/): work in the medium's index space, where the
+  // ray parameter t is the same as in world space.
+  Ray index_ray(const Ray& world) const {
+    return homogeneous() ? world : Ray{index_from_world_.point(world.o), index_from_world_.vector(world.d)};
+  }
+  Vec3 index_point(const Vec3& p_world) const { return homogeneous() ? p_world : index_from_world_.point(p_world); }
+  MajorantIterator majorants(const Ray& ray_index, float t_max) const { return majorants_.segments(ray_index, t_max); }
+  inline SampledSpectrum sigma_t(const Vec3& p_index, const PreparedMedium& prepared) const;
+  MediumProperties properties(const Vec3& p_index, const PreparedMedium& prepared) const;
+
+ private:
+  friend PreparedMedium prepare(const Medium& medium, const SampledWavelengths& lambda);
+  // A distinct grid and how to reach its index space from the medium's.
+  struct Channel {
+    const VoxelGrid* grid;
+    bool same_space;                     // its index space is the medium's
+    Transform grid_from_medium_index;
+  };
+  inline void lookup_channels(const Vec3& p_index, float* values) const;
+
+  MediumDesc desc_;
+  std::vector<Channel> channels_;
+  // Per pigment: its channel (-1: constant) and the factor to mol/L or the constant itself.
+  std::array<int, kMaxPigments> pigment_channel_{};
+  std::array<float, kMaxPigments> pigment_scale_{}, pigment_constant_{};
+  int particle_channel_ = -1;
+  Transform index_from_world_, world_from_index_;
+  MajorantGrid majorants_;
+};
+
+inline bool is_homogeneous(const Medium& medium) { return medium.homogeneous(); }
+
+// Evaluates the medium's spectra at the path's wavelengths.
+PreparedMedium prepare(const Medium& medium, const SampledWavelengths& lambda);
+
+// Coefficients at a world-space point.
+inline MediumProperties sample_point(const Medium& medium, const Vec3& p_world, const PreparedMedium& prepared) {
+  return medium.properties(medium.index_point(p_world), prepared);
+}
+
+inline void Medium::lookup_channels(const Vec3& p_index, float* values) const {
+  for (size_t c = 0; c < channels_.size(); ++c) {
+    const Channel& ch = channels_[c];
+    const Vec3 p = ch.same_space ? p_index : ch.grid_from_medium_index.point(p_index);
+    values[c] = ch.grid->lookup(p, desc_.interpolation);
+  }
+}
+
+inline SampledSpectrum Medium::sigma_t(const Vec3& p_index, const PreparedMedium& prepared) const {
+  float v[kMaxMajorantChannels];
+  lookup_channels(p_index, v);
+  SampledSpectrum s = prepared.sigma_t_constant;
+  for (size_t c = 0; c < channels_.size(); ++c) s += prepared.channel_sigma_t[c] * v[c];
+  return s;
+}
+
+}  // namespace chlorovdb
