@@ -1,0 +1,54 @@
+#pragma once
+// The one loop every tracking estimator shares: walk a medium's majorant
+// segments along a ray and draw tentative collisions in each at a rate the
+// estimator picks per segment (exponential free flights). Delta tracking, ratio
+// and residual ratio tracking and sample_T_maj differ only in the three
+// callbacks. Everything is inlined: no virtual call or allocation per collision.
+#include <optional>
+
+#include "core/rng.h"
+#include "core/sampling.h"
+#include "media/medium.h"
+
+namespace chlorovdb::detail {
+
+// begin(const MajorantSegment&) -> float: the collision rate in this segment (<= 0: none);
+// collide(float t) -> bool: a tentative collision at ray parameter t; false stops the walk;
+// end(const MajorantSegment&): the segment is done (not called after collide returned false).
+// u is the first uniform sample; later ones come from rng. Returns false if collide stopped the walk.
+template <typename Begin, typename Collide, typename End>
+bool walk_majorants(const Medium& medium, const Ray& ray_index, float t_max, float u, Rng& rng, Begin&& begin,
+                    Collide&& collide, End&& end) {
+  MajorantIterator it = medium.majorants(ray_index, t_max);
+  while (const std::optional<MajorantSegment> seg = it.next()) {
+    const float rate = begin(*seg);
+    if (rate > 0.f) {
+      float t = seg->t_min;
+      for (;;) {
+        t += sample_exponential(u, rate);
+        u = rng.uniform();
+        if (!(t < seg->t_max)) break;
+        if (!collide(t)) return false;
+      }
+    }
+    end(*seg);
+  }
+  return true;
+}
+
+// 1 on the lanes a path carries, 0 on the others (sampled.h: unused lanes hold zero).
+inline SampledSpectrum carried_lanes(int count) {
+  SampledSpectrum r;
+  for (int i = 0; i < count; ++i) r[i] = 1.f;
+  return r;
+}
+
+// e^{-a} on the carried lanes, 0 on the others: exp is the costly part of a
+// collision, so lanes nobody reads are skipped.
+inline SampledSpectrum exp_neg_lanes(const SampledSpectrum& a, int count) {
+  SampledSpectrum r;
+  for (int i = 0; i < count; ++i) r[i] = std::exp(-a[i]);
+  return r;
+}
+
+}  // namespace chlorovdb::detail

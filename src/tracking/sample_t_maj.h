@@ -1,0 +1,60 @@
+#pragma once
+// sample_T_maj: delta tracking against per-wavelength majorants, the sampling
+// primitive of null-scattering volumetric path tracing (pbrt-v4's SampleT_maj,
+// used the same way by VolPathIntegrator::Li and for ratio-tracked shadow rays).
+//
+// Contract:
+// - Tentative collisions are drawn with the hero wavelength's majorant
+//   sigma_maj[0] (lane 0 drives distances; segments where it is 0 get none).
+// - At each, callback(p, mp, sigma_maj, T_maj) is called with the world-space
+//   point, the medium's coefficients there (MediumProperties), the segment's
+//   per-lane majorant and the per-lane majorant transmittance e^{-sigma_maj dt}
+//   since the previous collision (or the ray origin). The collision's pdf for the
+//   hero is T_maj[0] * sigma_maj[0]; sigma_n = sigma_maj - sigma_a - sigma_s >= 0.
+//   The callback returns false to stop (absorption, scattering, roulette).
+// - Returns the majorant transmittance from the last collision to t_max, or 1
+//   if the callback stopped the walk (lanes the path does not carry are 0).
+// - Distances: the ray direction need not be unit length; tracking runs in
+//   metres along the normalised direction, and t_max is the ray's own parameter.
+// Other lanes stay unbiased through the spectral-MIS ratios r_u, r_l the caller
+// keeps (pbrt-v4): beta *= T_maj * sigma / pdf with pdf from lane 0.
+#include "media/medium.h"
+#include "spectra/sampled.h"
+#include "tracking/majorant_walk.h"
+
+namespace chlorovdb {
+
+template <typename F>
+SampledSpectrum sample_T_maj(Ray ray, float t_max, float u, Rng& rng, const SampledWavelengths& lambda,
+                             const Medium& medium, const PreparedMedium& prepared, F callback) {
+  const int n = lambda.count();
+  const SampledSpectrum one = detail::carried_lanes(n);
+  const float len = length(ray.d);
+  if (!(len > 0.f) || !(t_max > 0.f)) return one;
+  t_max *= len;
+  ray.d = ray.d / len;
+  const Ray ray_index = medium.index_ray(ray);
+  const int channels = medium.channels();
+
+  SampledSpectrum T_maj = one, sigma_maj;
+  float t_last = 0.f;  // previous collision, or the start of the segment
+  const bool finished = detail::walk_majorants(
+      medium, ray_index, t_max, u, rng,
+      [&](const MajorantSegment& s) {
+        sigma_maj = prepared.sigma_maj(s, channels);
+        t_last = s.t_min;
+        return sigma_maj[0];
+      },
+      [&](float t) {
+        T_maj *= detail::exp_neg_lanes(sigma_maj * (t - t_last), n);
+        t_last = t;
+        const MediumProperties mp = medium.properties(ray_index.at(t), prepared);
+        if (!callback(ray.at(t), mp, sigma_maj, T_maj)) return false;
+        T_maj = one;
+        return true;
+      },
+      [&](const MajorantSegment& s) { T_maj *= detail::exp_neg_lanes(sigma_maj * (s.t_max - t_last), n); });
+  return finished ? T_maj : one;
+}
+
+}  // namespace chlorovdb

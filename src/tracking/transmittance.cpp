@@ -1,0 +1,154 @@
+#include "tracking/transmittance.h"
+
+#include <algorithm>
+
+#include "core/constants.h"
+#include "tracking/majorant_walk.h"
+
+namespace chlorovdb {
+namespace {
+
+float max_lane(const SampledSpectrum& s, int n) {
+  float m = 0.f;
+  for (int i = 0; i < n; ++i) m = std::max(m, s[i]);
+  return m;
+}
+
+bool all_zero(const SampledSpectrum& s, int n) {
+  for (int i = 0; i < n; ++i)
+    if (s[i] != 0.f) return false;
+  return true;
+}
+
+// What the estimators share: the ray in the medium's index space, in metres.
+struct Track {
+  const Medium& medium;
+  const PreparedMedium& prepared;
+  Ray ray_index;
+  float t_end;
+  bool unbounded;
+  int n;  // carried wavelengths
+  int channels;
+};
+
+// Lanes of T whose sigma over an unbounded, uniform stretch is positive become 0.
+void cut_unbounded(const SampledSpectrum& sigma, int n, SampledSpectrum* T) {
+  for (int i = 0; i < n; ++i)
+    if (sigma[i] > 0.f) (*T)[i] = 0.f;
+}
+
+SampledSpectrum ratio_tracking(const Track& k, Rng& rng) {
+  SampledSpectrum T = detail::carried_lanes(k.n), sigma_maj;
+  float rate = 0.f;
+  detail::walk_majorants(
+      k.medium, k.ray_index, k.t_end, rng.uniform(), rng,
+      [&](const MajorantSegment& s) {
+        sigma_maj = k.prepared.sigma_maj(s, k.channels);
+        if (k.unbounded && s.t_max >= k.t_end) {
+          cut_unbounded(sigma_maj, k.n, &T);
+          return 0.f;
+        }
+        return rate = max_lane(sigma_maj, k.n);
+      },
+      [&](float t) {
+        const SampledSpectrum sigma_t = k.medium.sigma_t(k.ray_index.at(t), k.prepared);
+        T *= clamp_zero(SampledSpectrum(1.f) - sigma_t / rate);  // rounding may push sigma_t a hair past rate
+        return !all_zero(T, k.n);
+      },
+      [](const MajorantSegment&) {});
+  return T;
+}
+
+SampledSpectrum residual_ratio_tracking(const Track& k, Rng& rng) {
+  SampledSpectrum T = detail::carried_lanes(k.n), sigma_c;
+  float rate = 0.f;
+  detail::walk_majorants(
+      k.medium, k.ray_index, k.t_end, rng.uniform(), rng,
+      [&](const MajorantSegment& s) {
+        sigma_c = k.prepared.sigma_min(s, k.channels);
+        const SampledSpectrum sigma_maj = k.prepared.sigma_maj(s, k.channels);
+        if (k.unbounded && s.t_max >= k.t_end) {
+          cut_unbounded(sigma_maj, k.n, &T);
+          return 0.f;
+        }
+        // The control part is integrated exactly; only the residual is tracked.
+        T *= detail::exp_neg_lanes(sigma_c * (s.t_max - s.t_min), k.n);
+        return rate = max_lane(sigma_maj - sigma_c, k.n);
+      },
+      [&](float t) {
+        const SampledSpectrum sigma_r = k.medium.sigma_t(k.ray_index.at(t), k.prepared) - sigma_c;
+        T *= clamp_zero(SampledSpectrum(1.f) - sigma_r / rate);
+        return !all_zero(T, k.n);
+      },
+      [](const MajorantSegment&) {});
+  return T;
+}
+
+SampledSpectrum delta_tracking(const Track& k, Rng& rng) {
+  SampledSpectrum T = detail::carried_lanes(k.n), sigma_maj;
+  float rate = 0.f;
+  const bool escaped = detail::walk_majorants(
+      k.medium, k.ray_index, k.t_end, rng.uniform(), rng,
+      [&](const MajorantSegment& s) {
+        sigma_maj = k.prepared.sigma_maj(s, k.channels);
+        if (k.unbounded && s.t_max >= k.t_end) {
+          cut_unbounded(sigma_maj, k.n, &T);
+          return 0.f;
+        }
+        return rate = max_lane(sigma_maj, k.n);
+      },
+      [&](float t) {
+        const SampledSpectrum p_null =
+            clamp_zero(SampledSpectrum(1.f) - k.medium.sigma_t(k.ray_index.at(t), k.prepared) / rate);
+        const float P = max_lane(p_null, k.n);
+        if (!(rng.uniform() < P)) return false;  // a real collision: the path is absorbed
+        T *= p_null / P;
+        return true;
+      },
+      [](const MajorantSegment&) {});
+  return escaped ? T : SampledSpectrum(0.f);
+}
+
+}  // namespace
+
+std::optional<TransmittanceEstimator> transmittance_estimator_from_string(std::string_view name) {
+  for (TransmittanceEstimator e : {TransmittanceEstimator::delta, TransmittanceEstimator::ratio,
+                                   TransmittanceEstimator::residual_ratio, TransmittanceEstimator::closed_form})
+    if (name == to_string(e)) return e;
+  return std::nullopt;
+}
+
+const char* to_string(TransmittanceEstimator estimator) {
+  switch (estimator) {
+    case TransmittanceEstimator::delta: return "delta";
+    case TransmittanceEstimator::ratio: return "ratio";
+    case TransmittanceEstimator::residual_ratio: return "residual_ratio";
+    case TransmittanceEstimator::closed_form: return "closed_form";
+  }
+  return "?";
+}
+
+SampledSpectrum transmittance(const Ray& ray, float t_max, const SampledWavelengths& lambda, const Medium& medium,
+                              const PreparedMedium& prepared, TransmittanceEstimator estimator, Rng& rng) {
+  const int n = lambda.count();
+  const float len = length(ray.d);
+  if (!(len > 0.f) || !(t_max > 0.f)) return detail::carried_lanes(n);
+  const bool unbounded = t_max >= kInfinity;
+  if (estimator == TransmittanceEstimator::closed_form) {
+    if (medium.homogeneous()) {
+      SampledSpectrum T = detail::exp_neg_lanes(prepared.sigma_t_constant * (t_max * len), n);
+      if (unbounded) cut_unbounded(prepared.sigma_t_constant, n, &T);
+      return T;
+    }
+    estimator = TransmittanceEstimator::residual_ratio;
+  }
+  const Track k{medium, prepared, medium.index_ray({ray.o, ray.d / len}), t_max * len, unbounded, n,
+                medium.channels()};
+  switch (estimator) {
+    case TransmittanceEstimator::ratio: return ratio_tracking(k, rng);
+    case TransmittanceEstimator::delta: return delta_tracking(k, rng);
+    default: return residual_ratio_tracking(k, rng);
+  }
+}
+
+}  // namespace chlorovdb

@@ -1,0 +1,141 @@
+// Each transmittance estimator against exact optical depths: the mean of many
+// estimates must lie within 4 standard errors (from the sample variance) of
+// exp(-tau), per carried wavelength, from tau = 0.1 to 50.
+//
+// What can be checked at large tau: residual ratio tracking only tracks the
+// residual above each cell's minimum, so its relative variance stays small and
+// exp(-50) ~ 2e-22 is checked in relative terms. Ratio and delta (track-length)
+// tracking have relative variance growing like e^tau (with a tight majorant a
+// ratio-tracking estimate is almost always 0); for tau >= 20 no affordable
+// sample count resolves exp(-tau), and the test checks only that their mean is
+// within 4 standard errors plus 4/N of it (no bias upward of the resolution).
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <functional>
+
+#include "slab_fixture.h"
+#include "tracking/transmittance.h"
+
+using namespace chlorovdb;
+using namespace chlorovdb::test;
+
+namespace {
+
+struct Stats {
+  double mean[4] = {}, se[4] = {};
+};
+
+Stats estimate(const Slab& s, TransmittanceEstimator e, int n, uint64_t seed) {
+  const SampledWavelengths lambda = four_wavelengths();
+  const PreparedMedium pm = prepare(*s.medium, lambda);
+  Rng rng(seed, 0);
+  double sum[4] = {}, sum2[4] = {};
+  for (int i = 0; i < n; ++i) {
+    const SampledSpectrum T = transmittance(s.ray, s.t_max, lambda, *s.medium, pm, e, rng);
+    for (int l = 0; l < 4; ++l) {
+      sum[l] += T[l];
+      sum2[l] += double(T[l]) * T[l];
+    }
+    EXPECT_EQ(T[4], 0.f);  // lanes the path does not carry stay zero
+  }
+  Stats st;
+  for (int l = 0; l < 4; ++l) {
+    st.mean[l] = sum[l] / n;
+    const double var = std::max(0.0, sum2[l] / n - st.mean[l] * st.mean[l]) * n / (n - 1);
+    st.se[l] = std::sqrt(var / n);
+  }
+  return st;
+}
+
+// Relative tolerance for float rounding of a product of many factors.
+constexpr double kRounding = 2e-4;
+
+void expect_unbiased(const Slab& s, TransmittanceEstimator e, int n, uint64_t seed, bool relative) {
+  const Stats st = estimate(s, e, n, seed);
+  for (int l = 0; l < 4; ++l) {
+    const double exact = std::exp(-s.tau[l]);
+    double tolerance = 4.0 * st.se[l] + kRounding * exact;
+    if (!relative) tolerance += 4.0 / n;
+    EXPECT_NEAR(st.mean[l], exact, tolerance) << to_string(e) << " lane " << l << " tau " << s.tau[l]
+                                              << " se " << st.se[l];
+    if (relative && st.se[l] > 0) EXPECT_LT(st.se[l], 0.25 * exact) << "too noisy to mean anything, lane " << l;
+  }
+}
+
+const TransmittanceEstimator kTracking[] = {TransmittanceEstimator::ratio, TransmittanceEstimator::residual_ratio,
+                                            TransmittanceEstimator::delta};
+
+}  // namespace
+
+TEST(Transmittance, ClosedFormIsExactInHomogeneousSlabs) {
+  for (double tau : {0.1, 1.0, 5.0, 20.0, 50.0}) {
+    const Slab s = homogeneous_slab(tau);
+    const Stats st = estimate(s, TransmittanceEstimator::closed_form, 3, 1);
+    for (int l = 0; l < 4; ++l) EXPECT_NEAR(st.mean[l], std::exp(-s.tau[l]), 1e-5 * std::exp(-s.tau[l]));
+  }
+}
+
+TEST(Transmittance, TrackingIsUnbiasedInHomogeneousSlabs) {
+  uint64_t seed = 10;
+  for (double tau : {0.1, 1.0, 5.0, 20.0, 50.0})
+    for (TransmittanceEstimator e : kTracking)
+      expect_unbiased(homogeneous_slab(tau), e, 20000, seed++, tau <= 5.0 || e == TransmittanceEstimator::residual_ratio);
+}
+
+TEST(Transmittance, TrackingIsUnbiasedInPiecewiseLinearFields) {
+  uint64_t seed = 100;
+  for (double tau : {0.1, 1.0, 5.0})
+    for (TransmittanceEstimator e : kTracking) expect_unbiased(piecewise_linear_slab(tau, rough_profile()), e, 20000, seed++, true);
+  // Thick: a gentle field and a ray that stays inside the grid. Where the ray
+  // crosses the grid's edge, a cell's minimum is the background 0 and residual
+  // ratio tracking there is no better than ratio tracking.
+  for (double tau : {20.0, 50.0})
+    for (TransmittanceEstimator e : kTracking)
+      expect_unbiased(piecewise_linear_slab(tau, gentle_profile(), 8, true), e, 20000, seed++,
+                      e == TransmittanceEstimator::residual_ratio);
+}
+
+TEST(Transmittance, SmallMajorantCellsAndConstantFieldsToo) {
+  uint64_t seed = 200;
+  const std::vector<double> flat(64, 1.0);
+  for (double tau : {0.1, 2.0})
+    for (TransmittanceEstimator e : kTracking) {
+      expect_unbiased(piecewise_linear_slab(tau, rough_profile(), 1), e, 20000, seed++, true);
+      expect_unbiased(piecewise_linear_slab(tau, flat, 3), e, 20000, seed++, true);
+    }
+}
+
+TEST(Transmittance, GridMediaRunResidualRatioWhenAskedForClosedForm) {
+  const Slab s = piecewise_linear_slab(1.0, rough_profile());
+  expect_unbiased(s, TransmittanceEstimator::closed_form, 20000, 300, true);
+}
+
+TEST(Transmittance, UnboundedRaysAreExactlyOpaqueOrClear) {
+  // No solvent: lanes beyond the pigment's table (eps = 0) see nothing at all.
+  MediumDesc d;
+  d.pigments.push_back({Pigment{"red", Spectrum::tabulated({600.f, 700.f}, {1000.f, 1000.f}),
+                                Spectrum::constant(0.f), 0.f},
+                        Field::constant(1e-6f)});
+  const Medium m(d);
+  const float lambda_nm[] = {650.f, 450.f}, pdf[] = {1.f, 1.f};
+  const SampledWavelengths lambda = SampledWavelengths::from_values(lambda_nm, pdf, 2);
+  const PreparedMedium pm = prepare(m, lambda);
+  Rng rng(1, 0);
+  for (TransmittanceEstimator e : {TransmittanceEstimator::closed_form, TransmittanceEstimator::ratio,
+                                   TransmittanceEstimator::residual_ratio, TransmittanceEstimator::delta}) {
+    const SampledSpectrum T = transmittance({{0, 0, 0}, {1, 0, 0}}, kInfinity, lambda, m, pm, e, rng);
+    EXPECT_EQ(T[0], 0.f) << to_string(e);
+    EXPECT_EQ(T[1], 1.f) << to_string(e);
+  }
+}
+
+TEST(Transmittance, EstimatorNamesRoundTrip) {
+  for (TransmittanceEstimator e : {TransmittanceEstimator::delta, TransmittanceEstimator::ratio,
+                                   TransmittanceEstimator::residual_ratio, TransmittanceEstimator::closed_form})
+    EXPECT_EQ(transmittance_estimator_from_string(to_string(e)), e);
+  EXPECT_FALSE(transmittance_estimator_from_string("auto"));
+  EXPECT_EQ(automatic_transmittance_estimator(*homogeneous_slab(1.0).medium), TransmittanceEstimator::closed_form);
+  EXPECT_EQ(automatic_transmittance_estimator(*piecewise_linear_slab(1.0, rough_profile()).medium),
+            TransmittanceEstimator::residual_ratio);
+}
