@@ -110,7 +110,7 @@ PreparedMedium prepare(const Medium& medium, const SampledWavelengths& lambda) {
 }
 
 MediumProperties Medium::properties(const Vec3& p_index, const PreparedMedium& prepared) const {
-  float v[kMaxMajorantChannels];
+  float v[kMaxMajorantChannels] = {};
   lookup_channels(p_index, v);
   MediumProperties mp;
   mp.sigma_a = prepared.sigma_a_constant;

@@ -166,7 +166,7 @@ inline void Medium::lookup_channels(const Vec3& p_index, float* values) const {
 }
 
 inline SampledSpectrum Medium::sigma_t(const Vec3& p_index, const PreparedMedium& prepared) const {
-  float v[kMaxMajorantChannels];
+  float v[kMaxMajorantChannels] = {};
   lookup_channels(p_index, v);
   SampledSpectrum s = prepared.sigma_t_constant;
   for (size_t c = 0; c < channels_.size(); ++c) s += prepared.channel_sigma_t[c] * v[c];

@@ -63,7 +63,9 @@ TEST(MajorantGrid, SegmentsTileTheRayExactly) {
     EXPECT_EQ(segs.back().t_max, t_max);
     for (size_t s = 0; s < segs.size(); ++s) {
       EXPECT_LE(segs[s].t_min, segs[s].t_max);
-      if (s > 0) EXPECT_EQ(segs[s].t_min, segs[s - 1].t_max);
+      if (s > 0) {
+        EXPECT_EQ(segs[s].t_min, segs[s - 1].t_max);
+      }
     }
   }
 }
@@ -116,7 +118,9 @@ TEST(MajorantGrid, EmptyRunsComeOutAsOneSegment) {
   for (size_t s = 0; s < segs.size(); ++s) {
     const bool empty = segs[s].c_max[0] == 0.f;
     if (empty) ++empty_runs;
-    if (s > 0) EXPECT_FALSE(empty && segs[s - 1].c_max[0] == 0.f) << "two empty segments in a row";
+    if (s > 0) {
+      EXPECT_FALSE(empty && segs[s - 1].c_max[0] == 0.f) << "two empty segments in a row";
+    }
   }
   EXPECT_EQ(empty_runs, 3);
   EXPECT_LE(segs.size(), 3u + 2u * 3u);  // the stencil of one voxel reaches at most 3 cells of 4
@@ -135,7 +139,9 @@ TEST(MajorantGrid, RayOnCellBoundaryPlanesAndMissingRays) {
       d[a] = dir;
       const auto segs = collect(m, {o, d}, 100.f);
       EXPECT_EQ(segs.back().t_max, 100.f);
-      for (size_t s = 1; s < segs.size(); ++s) EXPECT_EQ(segs[s].t_min, segs[s - 1].t_max);
+      for (size_t s = 1; s < segs.size(); ++s) {
+        EXPECT_EQ(segs[s].t_min, segs[s - 1].t_max);
+      }
     }
   // A ray that misses the grid: one empty segment.
   const auto miss = collect(m, {b.hi + Vec3(10.f), {1.f, 0.f, 0.f}}, 50.f);

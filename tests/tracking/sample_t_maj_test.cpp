@@ -211,7 +211,7 @@ TEST(SampleTMaj, FurnaceWithAChromaticPureScattererReturnsOnePerLane) {
     Ray ray{box.center(), sample_uniform_sphere({rng.uniform(), rng.uniform()})};
     for (int bounce = 0; bounce < 10000; ++bounce) {
       float t0, t1;
-      intersect_bounds(box, ray, kInfinity, &t0, &t1);
+      ASSERT_TRUE(intersect_bounds(box, ray, kInfinity, &t0, &t1));  // every path starts inside
       bool scattered = false;
       const SampledSpectrum T_maj = sample_T_maj(
           ray, t1, rng.uniform(), rng, lambda, m, pm,

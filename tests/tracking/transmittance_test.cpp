@@ -59,7 +59,9 @@ void expect_unbiased(const Slab& s, TransmittanceEstimator e, int n, uint64_t se
     if (!relative) tolerance += 4.0 / n;
     EXPECT_NEAR(st.mean[l], exact, tolerance) << to_string(e) << " lane " << l << " tau " << s.tau[l]
                                               << " se " << st.se[l];
-    if (relative && st.se[l] > 0) EXPECT_LT(st.se[l], 0.25 * exact) << "too noisy to mean anything, lane " << l;
+    if (relative && st.se[l] > 0) {
+      EXPECT_LT(st.se[l], 0.25 * exact) << "too noisy to mean anything, lane " << l;
+    }
   }
 }
 
