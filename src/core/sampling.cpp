@@ -20,7 +20,7 @@ Distribution1D::Distribution1D(std::span<const float> weights) {
   for (size_t i = 0; i < n; ++i) {
     pdf_[i] = sum > 0 ? float(weights[i] / sum) : 1.f / float(n);
     acc += sum > 0 ? weights[i] / sum : 1.0 / double(n);
-    cdf_[i + 1] = float(acc);
+    cdf_[i + 1] = acc;
   }
   if (n) cdf_[n] = 1.f;
 }
@@ -32,8 +32,8 @@ int Distribution1D::sample(float u, float* pmf, float* u_remapped) const {
   while (pdf_[i] == 0.f && i > 0) --i;
   if (pmf) *pmf = pdf_[i];
   if (u_remapped) {
-    const float width = cdf_[i + 1] - cdf_[i];
-    *u_remapped = width > 0 ? std::min((u - cdf_[i]) / width, 0x1.fffffep-1f) : 0.f;
+    const double width = cdf_[i + 1] - cdf_[i];
+    *u_remapped = width > 0 ? std::min(float((u - cdf_[i]) / width), 0x1.fffffep-1f) : 0.f;
   }
   return i;
 }

@@ -93,7 +93,8 @@ class Distribution1D {
   float pmf(int i) const { return pdf_[i]; }
 
  private:
-  std::vector<float> pdf_, cdf_;
+  std::vector<float> pdf_;
+  std::vector<double> cdf_;  // double: with thousands of bins a float CDF's bin widths drift from pdf_
   float total_ = 0;
 };
 

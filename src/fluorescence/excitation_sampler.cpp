@@ -34,11 +34,15 @@ float ExcitationSampler::sample(float u, float* pdf) const {
   float pmf, u_in;
   const int b = bins_.sample(u, &pmf, &u_in);
   *pdf = pmf / bin_nm_;
-  return lambda_min_ + (b + u_in) * bin_nm_;
+  // In double, and kept strictly inside bin b: in float, b + u_in rounds up to
+  // b + 1 for u_in near 1, and pdf() would then read the neighbouring bin.
+  const double lo = lambda_min_ + double(b) * bin_nm_;
+  const float lambda = float(lo + double(u_in) * bin_nm_);
+  return std::clamp(lambda, float(lo), std::nextafter(float(lo + bin_nm_), float(lo)));
 }
 
 float ExcitationSampler::pdf(float lambda) const {
-  const int b = int(std::floor((lambda - lambda_min_) / bin_nm_));
+  const int b = int(std::floor((double(lambda) - lambda_min_) / bin_nm_));
   if (b < 0 || b >= bins_.size()) return 0.f;
   return bins_.pmf(b) / bin_nm_;
 }

@@ -1,0 +1,196 @@
+#include "integrator/fluorescence_event.h"
+
+#include <cmath>
+
+#include "core/sampling.h"
+
+namespace chlorovdb {
+
+namespace {
+
+// Full mode continues an excitation path with this probability (Russian
+// roulette, unbiased); nesting is also capped so no path can recurse without
+// bound (reaching the cap has probability ≤ 0.5^8 ≈ 0.4 %, times Q^8).
+constexpr float kContinuationProbability = 0.5f;
+constexpr int kMaxContinuationDepth = 8;
+// Share of continuation wavelengths drawn uniformly over 250–830 nm so the pdf
+// is positive wherever re-emitted fluorescence can be reabsorbed.
+constexpr float kUniformWavelengthShare = 0.2f;
+
+// Where on the segment to evaluate the source: a mixture of uniform (excitation
+// may peak anywhere) and exponential at the attenuation of the emitted light
+// (the camera sees mostly the first optical depth). Any positive pdf is unbiased.
+struct DistanceSample {
+  float t, pdf;
+};
+
+DistanceSample sample_source_distance(float u, float t_end, float sigma_ref) {
+  const bool use_exponential = sigma_ref * t_end > 1e-3f;
+  const float norm = use_exponential ? -std::expm1(-sigma_ref * t_end) : 1.f;
+  float t;
+  if (!use_exponential || u < 0.5f) {
+    t = (use_exponential ? u * 2.f : u) * t_end;
+  } else {
+    const float v = (u - 0.5f) * 2.f;
+    t = std::min(t_end, -std::log1p(-v * norm) / sigma_ref);
+  }
+  float pdf = 1.f / t_end;
+  if (use_exponential) pdf = 0.5f * pdf + 0.5f * sigma_ref * std::exp(-sigma_ref * t) / norm;
+  return {t, pdf};
+}
+
+// Distance to leave the scene's bounding box (for unbounded media).
+float distance_to_scene_exit(const Scene& scene, const Ray& ray) {
+  float t0, t1;
+  return intersect_bounds(scene.geometry.bounds(), ray, kInfinity, &t0, &t1) ? t1 : 0.f;
+}
+
+// Fluence-weighted absorption  λ'·μ_a(x,λ')·Φ̂(x,λ')  from light sources only:
+// one light, one point on it, λ' ∝ S·ε·λ', the excitation ray at λ'.
+float direct_excitation(const Scene& scene, const FluorescentPigment& fp, const Vec3& x, int medium, float c,
+                        Rng& rng, PathStats& stats, float* lambda_excitation) {
+  if (fp.lights.empty()) return 0.f;
+  const auto pick = fp.light_sampler.sample(rng.uniform());
+  if (!pick) return 0.f;
+  const int slot = fp.slot_of_light(pick->index);
+  const ExcitationSampler& es = fp.excitation[slot];
+  float pdf_lambda;
+  const float lp = es.sample(rng.uniform(), &pdf_lambda);
+  *lambda_excitation = lp;
+  SampledWavelengths wl = SampledWavelengths::single(lp);
+  const auto ls = sample_Li(scene.lights[pick->index], LightSampleContext{x, Vec3{}},
+                            Point2{rng.uniform(), rng.uniform()}, wl, scene.geometry);
+  if (!ls || ls->L.is_black() || !(ls->pdf > 0.f)) return 0.f;
+  ++stats.excitation_rays;
+  PreparedMedia media(scene, wl);
+  // Thin glass walls barely deviate a ray: cross them straight with Fresnel
+  // transmission so delta lights can excite liquid inside a vessel (docs/fluorescence.md).
+  const SampledSpectrum T = trace_transmittance(scene, ShadowOrigin{x, medium, nullptr}, ls->wi, ls->p_light,
+                                                ls->is_infinite, media, rng, DielectricCrossing::straight_through_fresnel);
+  if (T[0] == 0.f) return 0.f;
+  const float fluence = ls->L[0] * T[0] / (ls->pdf * pick->pmf * pdf_lambda);
+  return lp * kAbsorptionPerMolarExtinction * fp.epsilon(lp) * c * fluence;
+}
+
+// Same quantity for the fluence that did not come straight from a light:
+// an excitation path at λ'' in a uniformly sampled direction.
+float indirect_excitation(const Scene& scene, const FluorescentPigment& fp, const Vec3& x, int medium, float c,
+                          Rng& rng, PathStats& stats, int depth, float* lambda_excitation) {
+  const float range = kLambdaMax - kLambdaMinUV;
+  const float light_share = fp.lights.empty() ? 0.f : 1.f - kUniformWavelengthShare;
+  float lp;
+  if (rng.uniform() < light_share) {
+    float pdf_unused;
+    const auto pick = fp.light_sampler.sample(rng.uniform());
+    lp = fp.excitation[fp.slot_of_light(pick->index)].sample(rng.uniform(), &pdf_unused);
+  } else {
+    lp = kLambdaMinUV + rng.uniform() * range;
+  }
+  float pdf_lambda = (1.f - light_share) / range;
+  for (size_t l = 0; l < fp.lights.size(); ++l)
+    pdf_lambda += light_share * fp.light_sampler.pmf(fp.lights[l]) * fp.excitation[l].pdf(lp);
+  *lambda_excitation = lp;
+  const float eps = fp.epsilon(lp);
+  if (eps == 0.f) return 0.f;
+
+  ++stats.excitation_continuations;
+  SampledWavelengths wl = SampledWavelengths::single(lp);
+  const Vec3 w = sample_uniform_sphere(Point2{rng.uniform(), rng.uniform()});
+  PathOptions options;
+  options.skip_emitters_on_first_segment = true;
+  options.fluorescence_depth = depth + 1;
+  const PathRadiance sub = trace_path_from(scene, Ray{x, w}, medium, wl, rng, stats, options);
+  const float radiance = sub.fluorescence[0] + sub.other[0];
+  const float fluence = radiance / (uniform_sphere_pdf() * pdf_lambda * kContinuationProbability);
+  return lp * kAbsorptionPerMolarExtinction * eps * c * fluence;
+}
+
+}  // namespace
+
+SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, float t_end, int medium,
+                                            PreparedMedia& media, Rng& rng, PathStats& stats, int depth) {
+  const auto& pigments = scene.fluorescence[medium];
+  const SampledWavelengths& lambda = media.lambda();
+  const int n = lambda.count();
+  // One pigment per event, uniformly: media rarely hold more than one fluorophore.
+  const int k = std::min(int(rng.uniform() * pigments.size()), int(pigments.size()) - 1);
+  const FluorescentPigment& fp = pigments[k];
+  const float p_pigment = 1.f / float(pigments.size());
+
+  // Skip when no carried wavelength lies in the emission band.
+  const SampledSpectrum f = fp.emission.sample(lambda);
+  if (f.is_black()) return {};
+
+  if (!std::isfinite(t_end) || t_end >= kInfinity) t_end = distance_to_scene_exit(scene, ray);
+  if (!(t_end > 0.f)) return {};
+
+  const Medium& m = scene.media[medium];
+  const MediumProperties mid = sample_point(m, ray.at(0.5f * t_end), media[medium]);
+  float sigma_ref = 0.f;
+  int emitting = 0;
+  for (int i = 0; i < n; ++i)
+    if (f[i] > 0.f) sigma_ref += mid.sigma_a[i] + mid.sigma_s[i], ++emitting;
+  sigma_ref /= float(std::max(emitting, 1));
+
+  const DistanceSample ds = sample_source_distance(rng.uniform(), t_end, sigma_ref);
+  const Vec3 x = ray.at(ds.t);
+  const MediumProperties mp = sample_point(m, x, media[medium]);
+  const float c = mp.concentration[fp.pigment];
+  if (!(c > 0.f)) return {};
+  ++stats.fluorescence_events;
+
+  const SampledSpectrum T =
+      transmittance(ray, ds.t, lambda, m, media[medium], estimator_for(scene, medium), rng);
+  if (T.is_black()) return {};
+
+  SampledSpectrum j;  // emission per unit absorbed "λ'·μ_a·Φ", filled per lane below
+  auto add_emission = [&](float absorbed, float lp) {
+    if (absorbed == 0.f) return;
+    for (int i = 0; i < n; ++i)
+      j[i] += fp.quantum_yield * f[i] * fp.redistribution(lp, lambda[i]) * kInv4Pi / lambda[i] * absorbed;
+  };
+  float lp = 0.f;
+  const float direct = direct_excitation(scene, fp, x, medium, c, rng, stats, &lp);
+  add_emission(direct, lp);
+  if (scene.settings.fluorescence == FluorescenceMode::full && depth < kMaxContinuationDepth &&
+      rng.uniform() < kContinuationProbability) {
+    const float indirect = indirect_excitation(scene, fp, x, medium, c, rng, stats, depth, &lp);
+    add_emission(indirect, lp);
+  }
+
+  return T * j / (ds.pdf * p_pigment);
+}
+
+SampledSpectrum reference_fluorescence_event(const Scene& scene, const Vec3& p, int medium,
+                                             const SampledSpectrum& beta,
+                                             const SampledWavelengths& lambda, Rng& rng, PathStats& stats) {
+  const auto& pigments = scene.fluorescence[medium];
+  if (pigments.empty() || scene.light_sampler.empty()) return {};
+  const FluorescentPigment& fp = pigments[0];
+  // Emission is triggered by absorption at the hero wavelength, inside the emission domain only.
+  if (fp.emission(lambda[0]) == 0.f) return {};
+  if (rng.uniform() >= fp.quantum_yield) return {};  // Q as a roulette
+  ++stats.fluorescence_events;
+  const auto pick = scene.light_sampler.sample(rng.uniform());
+  if (!pick) return {};
+  const Light& light = scene.lights[pick->index];
+  const Spectrum& S = emission_spectrum(light);
+  const float lo = std::max(S.support_min(), kLambdaMinUV), hi = std::min(S.support_max(), lambda[0]);
+  if (!(hi > lo)) return {};
+  const float le = lo + rng.uniform() * (hi - lo);  // uniform excitation wavelength
+  SampledWavelengths wl = SampledWavelengths::single(le);
+  const auto ls = sample_Li(light, LightSampleContext{p, Vec3{}}, Point2{rng.uniform(), rng.uniform()}, wl,
+                            scene.geometry);
+  if (!ls || ls->L.is_black() || !(ls->pdf > 0.f)) return {};
+  ++stats.excitation_rays;
+  // One free-path test toward the light: a 0/1 transmittance estimate.
+  PreparedMedia media(scene, wl);
+  const SampledSpectrum T = trace_transmittance(scene, ShadowOrigin{p, medium, nullptr}, ls->wi, ls->p_light,
+                                                ls->is_infinite, media, rng, DielectricCrossing::block,
+                                                TransmittanceEstimator::delta);
+  if (T[0] == 0.f) return {};
+  const SampledSpectrum f = fp.emission.sample(lambda);
+  return beta * f * (ls->L[0] * T[0] / (ls->pdf * pick->pmf));
+}
+
+}  // namespace chlorovdb

@@ -1,0 +1,25 @@
+#pragma once
+// The fluorescence source term (PHYSICS.md §3) along a camera path.
+#include "core/rng.h"
+#include "integrator/path_tracer.h"
+#include "integrator/transport.h"
+
+namespace chlorovdb {
+
+// Unbiased estimate of  ∫_0^{t_end} T(0,t,λ) j(x(t), λ) dt  for every carried λ:
+// one point t on the segment, T by the scene's transmittance estimator, and
+// j from one excitation sample (light, point on it, λ' ∝ S·ε·λ') that serves
+// all carried wavelengths. In `full` mode an excitation continuation at λ'
+// adds the fluence that scattered, reflected, refracted or was re-emitted.
+SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, float t_end, int medium,
+                                            PreparedMedia& media, Rng& rng, PathStats& stats, int depth);
+
+// The thesis's estimator (PHYSICS.md §5), kept to measure its bias and cost:
+// called when the hero wavelength is absorbed at `p`; with probability Q it
+// becomes a fluorescence event that samples λ_e uniformly below λ within the
+// light's support and tests one free path toward the light.
+SampledSpectrum reference_fluorescence_event(const Scene& scene, const Vec3& p, int medium,
+                                             const SampledSpectrum& beta,
+                                             const SampledWavelengths& lambda, Rng& rng, PathStats& stats);
+
+}  // namespace chlorovdb

@@ -1,0 +1,223 @@
+#include "integrator/path_tracer.h"
+
+#include <cmath>
+
+#include "core/sampling.h"
+#include "integrator/fluorescence_event.h"
+#include "integrator/transport.h"
+#include "tracking/sample_t_maj.h"
+
+namespace chlorovdb {
+
+namespace {
+
+// A scattering vertex as seen by light sampling: where it is and how it scatters.
+struct ScatterVertex {
+  ShadowOrigin origin;
+  Vec3 n;  // shading normal at surfaces, zero in media
+};
+
+// Next-event estimation: one light, one point on it, the shadow ray through
+// media and interfaces. `scatter(wi)` returns {f·|cos|, pdf} of the vertex.
+// Returns the MIS-weighted contribution without the path throughput.
+template <typename ScatterFn>
+SampledSpectrum sample_direct_light(const Scene& scene, const ScatterVertex& v, const SampledSpectrum& r_p,
+                                    PreparedMedia& media, Rng& rng, ScatterFn&& scatter) {
+  if (scene.light_sampler.empty()) return {};
+  const auto pick = scene.light_sampler.sample(rng.uniform());
+  if (!pick || pick->pmf == 0.f) return {};
+  const Light& light = scene.lights[pick->index];
+  const SampledWavelengths& lambda = media.lambda();
+  const auto ls = sample_Li(light, LightSampleContext{v.origin.p, v.n}, Point2{rng.uniform(), rng.uniform()},
+                            lambda, scene.geometry);
+  if (!ls || ls->L.is_black() || !(ls->pdf > 0.f)) return {};
+  const auto [f, scatter_pdf] = scatter(ls->wi);
+  if (f.is_black()) return {};
+  const float light_pdf = ls->pdf * pick->pmf;
+  if (ls->is_delta) {
+    // No MIS partner: a transmittance estimate alone, with the scene's estimator.
+    const SampledSpectrum T = trace_transmittance(scene, v.origin, ls->wi, ls->p_light, ls->is_infinite, media, rng,
+                                                  DielectricCrossing::block);
+    return f * T * ls->L / (light_pdf * r_p.average(lambda.count()));
+  }
+  ShadowMis s = trace_shadow_mis(scene, v.origin, ls->wi, ls->p_light, ls->is_infinite, media, rng);
+  if (s.blocked) return {};
+  s.r_l *= r_p * light_pdf;
+  s.r_u *= r_p * scatter_pdf;
+  return f * s.T_ray * ls->L / (s.r_l + s.r_u).average(lambda.count());
+}
+
+}  // namespace
+
+PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWavelengths& lambda, Rng& rng,
+                             PathStats& stats, const PathOptions& options) {
+  PathRadiance L;
+  const int n = lambda.count();
+  PreparedMedia media(scene, lambda);
+  SampledSpectrum beta(1.f), r_u(1.f), r_l(1.f);
+  for (int i = n; i < kMaxWavelengths; ++i) beta[i] = r_u[i] = r_l[i] = 0.f;
+  bool specular_bounce = false;
+  bool count_emitters = !options.skip_emitters_on_first_segment;
+  float eta_scale = 1.f;
+  int depth = 0;
+  ScatterVertex prev{{ray.o, medium, nullptr}, Vec3{}};
+  // Where the current segment really starts. A ray spawned off a surface begins
+  // a float-error offset beyond it; the fluorescence integral must not skip that
+  // sliver, where strongly absorbed (UV) excitation deposits most of its energy.
+  Vec3 segment_start = ray.o;
+  SurfaceHit prev_hit;  // storage for prev.origin.hit
+  ++stats.paths;
+
+  // Light leaving an emitter toward the path, MIS-weighted against light sampling.
+  auto add_emitted = [&](const SampledSpectrum& Le, int light_index, const SurfaceHit* hit_on_light) {
+    if (Le.is_black() || !count_emitters) return;
+    if (depth == 0 || specular_bounce) {
+      L.other += beta * Le / r_u.average(n);
+      return;
+    }
+    const float light_pdf = scene.light_sampler.pmf(light_index) *
+                            pdf_Li(scene.lights[light_index], LightSampleContext{prev.origin.p, prev.n}, ray.d,
+                                   scene.geometry, hit_on_light);
+    const SampledSpectrum r_e = r_l * light_pdf;
+    L.other += beta * Le / (r_u + r_e).average(n);
+  };
+
+  for (int segments = 0; segments < options.max_segments; ++segments) {
+    ray.d = normalize(ray.d);
+    const auto hit = scene.geometry.intersect(ray, kInfinity);
+    const float t_end = hit ? hit->t : kInfinity;
+
+    if (medium >= 0) {
+      // Fluorescence: the source term j(x, λ) integrated along this segment.
+      if (!scene.fluorescence[medium].empty() && scene.settings.fluorescence != FluorescenceMode::off &&
+          scene.settings.fluorescence != FluorescenceMode::reference) {
+        const SampledSpectrum weight = beta / r_u.average(n);
+        const float gap = std::max(0.f, dot(ray.o - segment_start, ray.d));
+        L.fluorescence += weight * estimate_fluorescence_along(scene, Ray{ray.o - ray.d * gap, ray.d}, t_end + gap,
+                                                               medium, media, rng, stats, options.fluorescence_depth);
+      }
+
+      // Delta tracking with the hero wavelength; other lanes are weighted (spectral MIS).
+      bool scattered = false, terminated = false;
+      const SampledSpectrum T_maj = sample_T_maj(
+          ray, t_end, rng.uniform(), rng, lambda, scene.media[medium], media[medium],
+          [&](const Vec3& p, const MediumProperties& mp, const SampledSpectrum& sigma_maj,
+              const SampledSpectrum& T_m) {
+            const float p_absorb = mp.sigma_a[0] / sigma_maj[0];
+            const float p_scatter = mp.sigma_s[0] / sigma_maj[0];
+            const float u = rng.uniform();
+            if (u < p_absorb) {
+              if (scene.settings.fluorescence == FluorescenceMode::reference)
+                L.fluorescence += reference_fluorescence_event(scene, p, medium, beta / r_u.average(n), lambda,
+                                                               rng, stats);
+              terminated = true;
+              return false;
+            }
+            if (u < p_absorb + p_scatter) {
+              if (depth++ >= scene.settings.max_depth) {
+                terminated = true;
+                return false;
+              }
+              const float pdf = T_m[0] * mp.sigma_s[0];
+              beta *= T_m * mp.sigma_s / pdf;
+              r_u *= T_m * mp.sigma_s / pdf;
+              if (beta.is_black() || r_u.is_black()) {
+                terminated = true;
+                return false;
+              }
+              const Vec3 wo = -ray.d;
+              const ScatterVertex v{{p, medium, nullptr}, Vec3{}};
+              L.other += beta * sample_direct_light(scene, v, r_u, media, rng, [&](const Vec3& wi) {
+                           return std::pair{phase_eval(mp.phase, wo, wi), phase_pdf(mp.phase, wo, wi)};
+                         });
+              const MediumPhaseSample ps = phase_sample(mp.phase, wo, Point2{rng.uniform(), rng.uniform()});
+              if (!(ps.pdf > 0.f)) {
+                terminated = true;
+                return false;
+              }
+              beta *= ps.p / ps.pdf;
+              r_l = r_u / ps.pdf;
+              prev = v;
+              specular_bounce = false;
+              count_emitters = true;
+              scattered = true;
+              ray = Ray{p, ps.wi};
+              segment_start = p;
+              return false;
+            }
+            // Null collision: continue, weighting every lane by sigma_n / its pdf.
+            const SampledSpectrum sigma_n = clamp_zero(sigma_maj - mp.sigma_a - mp.sigma_s);
+            const float pdf = T_m[0] * sigma_n[0];
+            beta *= pdf > 0.f ? T_m * sigma_n / pdf : SampledSpectrum(0.f);
+            r_u *= pdf > 0.f ? T_m * sigma_n / pdf : SampledSpectrum(0.f);
+            r_l *= T_m * sigma_maj / (T_m[0] * sigma_maj[0]);
+            return !beta.is_black() && !r_u.is_black();
+          });
+      if (terminated || beta.is_black() || r_u.is_black()) break;
+      if (scattered) continue;
+      beta *= T_maj / T_maj[0];
+      r_u *= T_maj / T_maj[0];
+      r_l *= T_maj / T_maj[0];
+    }
+
+    if (!hit) {
+      for (int li : scene.infinite_lights)
+        add_emitted(Le_environment(std::get<EnvironmentLight>(scene.lights[li]), ray.d, lambda), li, nullptr);
+      break;
+    }
+
+    const ShapeBinding& binding = scene.shapes[hit->shape_id];
+    if (binding.area_light >= 0)
+      add_emitted(Le_area(std::get<AreaLight>(scene.lights[binding.area_light]), hit->ng, -ray.d, lambda),
+                  binding.area_light, &*hit);
+
+    if (is_pass_through(scene, binding)) {
+      // A medium boundary: cross it without a bounce.
+      medium = medium_after_crossing(binding, hit->ng, ray.d);
+      ray = scene.geometry.spawn_ray(*hit, ray.d);
+      segment_start = hit->p;
+      continue;
+    }
+    if (depth++ >= scene.settings.max_depth) break;
+
+    const Vec3 wo = -ray.d;
+    const Bsdf bsdf = make_bsdf(scene.materials[binding.material], *hit, lambda);
+    prev_hit = *hit;
+    const int medium_here = dot(wo, hit->ng) > 0.f ? binding.medium_outside : binding.medium_inside;
+    const ScatterVertex v{{hit->p, medium_here, &prev_hit}, hit->ns};
+    if (!bsdf.is_specular()) {
+      L.other += beta * sample_direct_light(scene, v, r_u, media, rng, [&](const Vec3& wi) {
+                   return std::pair{bsdf.f(wo, wi) * std::fabs(dot(wi, hit->ns)), bsdf.pdf(wo, wi)};
+                 });
+    }
+    const auto bs = bsdf.sample(wo, rng.uniform(), Point2{rng.uniform(), rng.uniform()});
+    if (!bs || bs->pdf == 0.f) break;
+    beta *= bs->f * std::fabs(dot(bs->wi, hit->ns)) / bs->pdf;
+    r_l = r_u / bs->pdf;
+    specular_bounce = bs->is_specular;
+    count_emitters = true;
+    if (bs->is_transmission) eta_scale *= bs->eta * bs->eta;
+    prev = v;
+    // Crossing a refracting surface changes medium; reflection keeps it.
+    medium = dot(bs->wi, hit->ng) < 0.f ? binding.medium_inside : binding.medium_outside;
+    ray = scene.geometry.spawn_ray(*hit, bs->wi);
+    segment_start = hit->p;
+
+    // Russian roulette on the MIS-weighted throughput (eta_scale undoes radiance
+    // compression inside dense dielectrics).
+    const SampledSpectrum rr_beta = beta * eta_scale / r_u.average(n);
+    if (rr_beta.max_value() < 1.f && depth > 1) {
+      const float q = std::max(0.f, 1.f - rr_beta.max_value());
+      if (rng.uniform() < q) break;
+      beta /= 1.f - q;
+    }
+  }
+  return L;
+}
+
+PathRadiance trace_path(const Scene& scene, Ray ray, int medium, SampledWavelengths& lambda, Rng& rng,
+                        PathStats& stats) {
+  return trace_path_from(scene, ray, medium, lambda, rng, stats, PathOptions{});
+}
+
+}  // namespace chlorovdb

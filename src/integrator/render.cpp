@@ -1,0 +1,110 @@
+#include "integrator/render.h"
+
+#include <algorithm>
+#include <chrono>
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include "io/progress.h"
+
+namespace chlorovdb {
+
+namespace {
+
+constexpr int kTileSize = 16;
+
+struct Tile {
+  int x0, y0, x1, y1;
+};
+
+std::vector<Tile> make_tiles(int width, int height) {
+  std::vector<Tile> tiles;
+  for (int y = 0; y < height; y += kTileSize)
+    for (int x = 0; x < width; x += kTileSize)
+      tiles.push_back({x, y, std::min(x + kTileSize, width), std::min(y + kTileSize, height)});
+  return tiles;
+}
+
+// Passes grow 1, 1, 2, 4, 8, 8, ...: the first image appears fast, and an
+// interrupt loses at most one short pass.
+int next_pass_size(int done, int remaining) { return std::min(remaining, std::clamp(done, 1, 8)); }
+
+void render_tile(const Scene& scene, Film& film, const Tile& tile, int s0, int s1, uint64_t seed, PathStats& stats) {
+  const int n_lambda = scene.settings.wavelengths;
+  for (int y = tile.y0; y < tile.y1; ++y)
+    for (int x = tile.x0; x < tile.x1; ++x)
+      for (int s = s0; s < s1; ++s) {
+        Rng rng = sample_rng(seed, x, y, s);
+        SampledWavelengths lambda = SampledWavelengths::sample_visible(rng.uniform(), n_lambda);
+        const Point2 film_pos{x + rng.uniform(), y + rng.uniform()};  // box filter
+        const Ray ray = scene.camera.generate_ray(film_pos, Point2{rng.uniform(), rng.uniform()});
+        const PathRadiance L = trace_path(scene, ray, scene.camera_medium, lambda, rng, stats);
+        film.add_sample(x, y, kLayerTotal, L.fluorescence + L.other, lambda);
+        film.add_sample(x, y, kLayerFluorescence, L.fluorescence, lambda);
+        film.add_sample(x, y, kLayerNonFluorescence, L.other, lambda);
+      }
+}
+
+}  // namespace
+
+std::vector<std::string> film_layer_names() { return {"total", "fluorescence", "nonfluorescence"}; }
+
+Rng sample_rng(uint64_t seed, int x, int y, int sample) {
+  const uint64_t pixel = (uint64_t(uint32_t(y)) << 32) | uint32_t(x);
+  return Rng(hash_combine(hash_combine(seed, pixel), uint64_t(sample)), mix_bits(seed + 1));
+}
+
+RenderStats render(const Scene& scene, Film& film, const RenderOptions& options) {
+  RenderStats result;
+  const auto start = std::chrono::steady_clock::now();
+  const int width = scene.settings.width, height = scene.settings.height;
+  const std::vector<Tile> tiles = make_tiles(width, height);
+  tbb::enumerable_thread_specific<PathStats> stats;
+  tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
+  const bool spectral = film.spectral_bins() > 0;
+  std::unique_ptr<Progress> progress;
+  if (options.show_progress) progress = std::make_unique<Progress>(int64_t(tiles.size()) * options.spp, "render");
+
+  auto stopped = [&] { return options.stop && options.stop->load(std::memory_order_relaxed); };
+  int done = 0;
+  while (done < options.spp && !stopped()) {
+    const int count = next_pass_size(done, options.spp - done);
+    const int s0 = options.first_sample + done;
+    // Each pass renders into its own film, merged only when complete, so an
+    // interrupted pass never leaves pixels with fewer samples than the others.
+    Film pass(width, height, film.layer_names(), film.color_space());
+    if (spectral) pass.enable_spectral(film.spectral_min_nm(), film.spectral_max_nm(), film.spectral_bins());
+    std::atomic<bool> pass_complete{true};
+    arena.execute([&] {
+      tbb::parallel_for(tbb::blocked_range<size_t>(0, tiles.size(), 1), [&](const tbb::blocked_range<size_t>& r) {
+        for (size_t t = r.begin(); t < r.end(); ++t) {
+          if (stopped()) {
+            pass_complete = false;
+            return;
+          }
+          render_tile(scene, pass, tiles[t], s0, s0 + count, options.seed, stats.local());
+          if (progress) progress->add(count);
+        }
+      });
+    });
+    if (!pass_complete || stopped()) break;
+    film.merge(pass);
+    done += count;
+    if (options.on_pass) options.on_pass(done);
+  }
+  if (progress) progress->finish();
+  result.samples_done = done;
+  result.interrupted = done < options.spp;
+  for (const PathStats& s : stats) {
+    result.paths.paths += s.paths;
+    result.paths.fluorescence_events += s.fluorescence_events;
+    result.paths.excitation_rays += s.excitation_rays;
+    result.paths.excitation_continuations += s.excitation_continuations;
+  }
+  result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return result;
+}
+
+}  // namespace chlorovdb

@@ -1,0 +1,131 @@
+#include "integrator/transport.h"
+
+#include "tracking/sample_t_maj.h"
+
+#include <cmath>
+
+namespace chlorovdb {
+
+namespace {
+
+// The first shadow-ray segment: offset off the origin surface if there is one.
+Ray first_segment(const Scene& scene, const ShadowOrigin& from, const Vec3& wi, const Vec3& p_light,
+                  bool to_infinity, float* t_max) {
+  if (to_infinity) {
+    *t_max = kInfinity;
+    return from.hit ? scene.geometry.spawn_ray(*from.hit, wi) : Ray{from.p, wi};
+  }
+  if (from.hit) return scene.geometry.spawn_ray_to(*from.hit, p_light, t_max);
+  *t_max = 1.f;
+  return Ray{from.p, p_light - from.p};
+}
+
+// Next segment after crossing `hit` toward the light.
+Ray next_segment(const Scene& scene, const SurfaceHit& hit, const Vec3& wi, const Vec3& p_light, bool to_infinity,
+                 float* t_max) {
+  if (to_infinity) {
+    *t_max = kInfinity;
+    return scene.geometry.spawn_ray(hit, wi);
+  }
+  return scene.geometry.spawn_ray_to(hit, p_light, t_max);
+}
+
+// Unpolarised Fresnel transmittance of a smooth dielectric at this crossing.
+float dielectric_transmission(const Scene& scene, const ShapeBinding& b, const SurfaceHit& hit, const Ray& ray,
+                              const SampledWavelengths& lambda) {
+  const auto& glass = std::get<Dielectric>(scene.materials[b.material]);
+  // cos_i > 0 when entering (moving against ng); fresnel_dielectric inverts eta otherwise.
+  return 1.f - fresnel_dielectric(dot(-normalize(ray.d), hit.ng), ior_at(glass, lambda[0]));
+}
+
+}  // namespace
+
+TransmittanceEstimator estimator_for(const Scene& scene, int medium) {
+  if (scene.settings.transmittance_auto) return automatic_transmittance_estimator(scene.media[medium]);
+  if (scene.settings.transmittance == TransmittanceEstimator::closed_form && !is_homogeneous(scene.media[medium]))
+    return TransmittanceEstimator::residual_ratio;
+  return scene.settings.transmittance;
+}
+
+ShadowMis trace_shadow_mis(const Scene& scene, const ShadowOrigin& from, const Vec3& wi, const Vec3& p_light,
+                           bool to_infinity, PreparedMedia& media, Rng& rng) {
+  ShadowMis s;
+  float t_max;
+  Ray ray = first_segment(scene, from, wi, p_light, to_infinity, &t_max);
+  int medium = from.medium;
+  const SampledWavelengths& lambda = media.lambda();
+  for (int crossings = 0; crossings < 256; ++crossings) {
+    const auto hit = scene.geometry.intersect(ray, t_max);
+    if (hit && !is_pass_through(scene, scene.shapes[hit->shape_id])) {
+      s.blocked = true;
+      return s;
+    }
+    if (medium >= 0) {
+      const float t_end = hit ? hit->t : t_max;
+      // Ratio tracking inside the null-scattering framework: every tentative
+      // collision multiplies by sigma_n/sigma_maj (pbrt-v4 SampleLd).
+      const SampledSpectrum T_maj = sample_T_maj(
+          ray, t_end, rng.uniform(), rng, lambda, scene.media[medium], media[medium],
+          [&](const Vec3&, const MediumProperties& mp, const SampledSpectrum& sigma_maj,
+              const SampledSpectrum& T_m) {
+            const SampledSpectrum sigma_n = clamp_zero(sigma_maj - mp.sigma_a - mp.sigma_s);
+            const float pdf = T_m[0] * sigma_maj[0];
+            s.T_ray *= T_m * sigma_n / pdf;
+            s.r_l *= T_m * sigma_maj / pdf;
+            s.r_u *= T_m * sigma_n / pdf;
+            // Russian roulette on low transmittance keeps thick media cheap.
+            const SampledSpectrum Tr = safe_div(s.T_ray, SampledSpectrum(0.5f) * (s.r_l + s.r_u));
+            if (Tr.max_value() < 0.05f) {
+              if (rng.uniform() < 0.75f) s.T_ray = SampledSpectrum(0.f);
+              else s.T_ray /= 0.25f;
+            }
+            return !s.T_ray.is_black();
+          });
+      s.T_ray *= T_maj / T_maj[0];
+      s.r_l *= T_maj / T_maj[0];
+      s.r_u *= T_maj / T_maj[0];
+      if (s.T_ray.is_black()) {
+        s.blocked = true;
+        return s;
+      }
+    }
+    if (!hit) return s;
+    medium = medium_after_crossing(scene.shapes[hit->shape_id], hit->ng, ray.d);
+    ray = next_segment(scene, *hit, wi, p_light, to_infinity, &t_max);
+  }
+  s.blocked = true;  // more crossings than any sane scene has: treat as occluded
+  return s;
+}
+
+SampledSpectrum trace_transmittance(const Scene& scene, const ShadowOrigin& from, const Vec3& wi,
+                                    const Vec3& p_light, bool to_infinity, PreparedMedia& media, Rng& rng,
+                                    DielectricCrossing dielectrics, std::optional<TransmittanceEstimator> forced) {
+  SampledSpectrum T(1.f);
+  float t_max;
+  Ray ray = first_segment(scene, from, wi, p_light, to_infinity, &t_max);
+  int medium = from.medium;
+  const SampledWavelengths& lambda = media.lambda();
+  for (int crossings = 0; crossings < 256; ++crossings) {
+    const auto hit = scene.geometry.intersect(ray, t_max);
+    if (hit) {
+      const ShapeBinding& b = scene.shapes[hit->shape_id];
+      if (!is_pass_through(scene, b)) {
+        const bool glass = std::holds_alternative<Dielectric>(scene.materials[b.material]);
+        if (!glass || dielectrics == DielectricCrossing::block) return SampledSpectrum(0.f);
+        T *= dielectric_transmission(scene, b, *hit, ray, lambda);
+      }
+    }
+    if (medium >= 0) {
+      const float t_end = hit ? hit->t : t_max;
+      const TransmittanceEstimator estimator = forced ? *forced : estimator_for(scene, medium);
+      T *= transmittance(ray, t_end, lambda, scene.media[medium], media[medium], estimator, rng);
+      if (T.is_black()) return T;
+    }
+    if (!hit) return T;
+    medium = medium_after_crossing(scene.shapes[hit->shape_id], hit->ng, ray.d);
+    ray = next_segment(scene, *hit, wi, p_light, to_infinity, &t_max);
+  }
+  return SampledSpectrum(0.f);
+}
+
+}  // namespace chlorovdb

@@ -1,0 +1,89 @@
+#pragma once
+// Everything a render needs, built once from a scene file (scene_loader.h) and
+// then read-only: safe to share between render threads.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "camera/camera.h"
+#include "film/film.h"
+#include "fluorescence/excitation_sampler.h"
+#include "fluorescence/redistribution.h"
+#include "geometry/geometry_scene.h"
+#include "lights/light.h"
+#include "lights/light_sampler.h"
+#include "materials/bsdf.h"
+#include "materials/material.h"
+#include "media/medium.h"
+#include "tracking/transmittance.h"
+
+namespace chlorovdb {
+
+enum class FluorescenceMode { off, direct, full, reference };
+
+struct RenderSettings {
+  int width = 512, height = 512;
+  int spp = 64;
+  int max_depth = 32;
+  int wavelengths = 8;
+  uint64_t seed = 0;
+  ColorSpace color_space = ColorSpace::sRGB;
+  float exposure = 0.f;
+  TransmittanceEstimator transmittance = TransmittanceEstimator::residual_ratio;
+  bool transmittance_auto = true;  // closed form where homogeneous, residual ratio in grids
+  FluorescenceMode fluorescence = FluorescenceMode::direct;
+  bool fluorescence_auto = true;  // `auto` in the scene: direct where exact, full otherwise
+  std::string fluorescence_reason;  // why auto chose what it chose (reported to the user)
+  int spectral_bins = 0;
+};
+
+// What a surface is made of and what lies on each side of it.
+struct ShapeBinding {
+  int material = -1;  // index into Scene::materials; -1: emitter-only shape
+  int medium_inside = -1, medium_outside = -1;  // -1: vacuum
+  int area_light = -1;  // index into Scene::lights
+};
+
+// One fluorescent pigment of one medium, with what excitation needs: the
+// lights that can excite it (others are never picked) and, per such light, the
+// λ' sampler ∝ S_light·ε·λ'.
+struct FluorescentPigment {
+  int pigment = 0;  // index into the medium's pigments
+  float quantum_yield = 0.f;
+  Spectrum epsilon;   // L mol^-1 cm^-1
+  Spectrum emission;  // unit integral
+  RedistributionWeight redistribution;
+  std::vector<int> lights;                     // lights that can excite it
+  std::vector<ExcitationSampler> excitation;   // parallel to `lights`
+  LightSampler light_sampler;                  // over `lights`, weighted by excitation power
+  int slot_of_light(int light_index) const {   // position of a light in `lights`
+    for (size_t s = 0; s < lights.size(); ++s)
+      if (lights[s] == light_index) return int(s);
+    return -1;
+  }
+};
+
+struct Scene {
+  explicit Scene(Camera camera_) : camera(std::move(camera_)) {}
+  std::filesystem::path file;
+  RenderSettings settings;
+  Camera camera;
+  GeometryScene geometry;
+  std::vector<ShapeBinding> shapes;  // by shape id
+  std::vector<Material> materials;
+  std::vector<Light> lights;
+  LightSampler light_sampler;
+  std::vector<int> infinite_lights;  // environment lights, seen by rays that escape
+  std::vector<Medium> media;
+  std::vector<std::string> medium_names;
+  std::vector<std::vector<FluorescentPigment>> fluorescence;  // per medium
+  int camera_medium = -1;
+
+  bool has_fluorescence() const {
+    for (const auto& f : fluorescence)
+      if (!f.empty()) return true;
+    return false;
+  }
+};
+
+}  // namespace chlorovdb

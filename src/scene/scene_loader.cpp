@@ -1,0 +1,388 @@
+#include "scene/scene_loader.h"
+
+#include <cmath>
+#include <map>
+
+#include <fmt/format.h>
+
+#include "core/error.h"
+#include "fluorescence/emission_spectrum.h"
+#include "scene/medium_param.h"
+#include "scene/param_reader.h"
+#include "scene/spectrum_param.h"
+#include "spectra/color.h"
+#include "spectra/library.h"
+
+namespace chlorovdb {
+
+namespace {
+
+// Name -> index tables with "did you mean" on a miss.
+class NameTable {
+ public:
+  void add(const std::string& name, int index) { index_[name] = index; }
+  bool contains(const std::string& name) const { return index_.count(name) != 0; }
+  int find(ParamReader& params, const std::string& key, const std::string& what) const {
+    const std::string name = params.require_string(key);
+    const auto it = index_.find(name);
+    if (it != index_.end()) return it->second;
+    std::vector<std::string> names;
+    for (const auto& [n, i] : index_) names.push_back(n);
+    const std::string near = nearest_word(name, names);
+    params.fail(key, fmt::format("no {} of that name{}", what, near.empty() ? "" : fmt::format(" (did you mean \"{}\"?)", near)));
+  }
+
+ private:
+  std::map<std::string, int> index_;
+};
+
+float length_unit_in_metres(ParamReader& top) {
+  const std::string unit = top.get_enum("length_unit", "m", {"m", "cm", "mm", "um"});
+  if (unit == "cm") return 1e-2f;
+  if (unit == "mm") return 1e-3f;
+  if (unit == "um") return 1e-6f;
+  return 1.f;
+}
+
+const std::vector<std::string> kFluorescenceModes{"auto", "direct", "full", "reference", "off"};
+const std::vector<std::string> kEstimators{"auto", "ratio", "residual_ratio", "delta"};
+
+void check_choice(const std::string& flag, const std::string& value, const std::vector<std::string>& choices) {
+  if (std::find(choices.begin(), choices.end(), value) != choices.end()) return;
+  const std::string near = nearest_word(value, choices);
+  throw InputError("command line", flag, value,
+                   fmt::format("must be one of {}{}", fmt::join(choices, ", "),
+                               near.empty() ? "" : fmt::format(" (did you mean \"{}\"?)", near)));
+}
+
+RenderSettings read_render_settings(ParamReader& top, const SceneOverrides& o, std::string* fluorescence,
+                                    std::string* transmittance) {
+  RenderSettings s;
+  if (auto r = top.optional_child("render")) {
+    const auto res = r->get_floats("resolution", {512.f, 512.f}, 2);
+    if (res.size() != 2 || res[0] < 1 || res[1] < 1 || res[0] > 65536 || res[1] > 65536 ||
+        res[0] != std::floor(res[0]) || res[1] != std::floor(res[1]))
+      r->fail("resolution", "expected [width, height], whole numbers in [1, 65536]");
+    s.width = int(res[0]);
+    s.height = int(res[1]);
+    s.spp = r->get_int("spp", s.spp, 1, 1 << 24);
+    s.max_depth = r->get_int("max_depth", s.max_depth, 0, 100000);
+    s.wavelengths = r->get_int("wavelengths", s.wavelengths, 1, kMaxWavelengths);
+    s.seed = uint64_t(r->get_int("seed", 0, 0));
+    s.color_space = r->get_enum("color_space", "srgb", {"srgb", "acescg"}) == "acescg" ? ColorSpace::ACEScg
+                                                                                        : ColorSpace::sRGB;
+    s.exposure = r->get_float("exposure", 0.f, -40.f, 40.f);
+    *transmittance = r->get_enum("transmittance", "auto", kEstimators);
+    *fluorescence = r->get_enum("fluorescence", "auto", kFluorescenceModes);
+    s.spectral_bins = r->get_int("spectral_bins", 0, 0, 4096);
+    r->finish();
+  } else {
+    *transmittance = "auto";
+    *fluorescence = "auto";
+  }
+  if (o.width) s.width = *o.width;
+  if (o.height) s.height = *o.height;
+  if (o.spp) s.spp = *o.spp;
+  if (o.wavelengths) s.wavelengths = *o.wavelengths;
+  if (o.seed) s.seed = *o.seed;
+  if (o.transmittance) check_choice("--transmittance", *transmittance = *o.transmittance, kEstimators);
+  if (o.fluorescence) check_choice("--fluorescence", *fluorescence = *o.fluorescence, kFluorescenceModes);
+  s.transmittance_auto = *transmittance == "auto";
+  if (!s.transmittance_auto) s.transmittance = *transmittance_estimator_from_string(*transmittance);
+  return s;
+}
+
+Camera read_camera(ParamReader& top, const RenderSettings& s, float unit) {
+  ParamReader c = top.child("camera");
+  const std::string type = c.get_enum("type", "perspective", {"perspective", "orthographic"});
+  const Vec3 eye = c.require_vec3("position") * unit;
+  const Vec3 target = c.require_vec3("look_at") * unit;
+  const Vec3 up = c.get_vec3("up", {0, 1, 0});
+  if (length(target - eye) == 0.f) c.fail("look_at", "must differ from \"position\"");
+  Transform world_from_camera;
+  try {
+    world_from_camera = Transform::look_at(eye, target, up);
+  } catch (const std::domain_error& e) {
+    c.fail("up", e.what());
+  }
+  Camera::Projection projection;
+  if (type == "perspective") {
+    PerspectiveCamera p;
+    p.world_from_camera = world_from_camera;
+    p.fov_degrees = c.get_float("fov", 40.f, 1e-3f, 179.9f);
+    p.lens_radius = c.get_float("lens_radius", 0.f, 0.f) * unit;
+    p.focus_distance = c.get_float("focus_distance", length(target - eye) / unit, 1e-9f) * unit;
+    projection = p;
+  } else {
+    projection = OrthographicCamera{world_from_camera, c.get_float("height", 1.f, 1e-12f) * unit};
+  }
+  c.finish();
+  return Camera(projection, s.width, s.height);
+}
+
+Material read_material(ParamReader& m) {
+  const std::string type = m.get_enum("type", "diffuse", {"diffuse", "dielectric", "interface"});
+  Material result = Interface{};
+  if (type == "diffuse") {
+    const Spectrum albedo = read_spectrum(m, "albedo", Spectrum::constant(0.5f));
+    if (albedo.max_value() > 1.f) m.fail("albedo", "reflectance must not exceed 1 at any wavelength");
+    result = Diffuse{albedo};
+  } else if (type == "dielectric") {
+    Dielectric d{1.5f};
+    if (m.has("ior") && m.raw("ior").is_object()) {
+      ParamReader ior = m.child("ior");
+      ParamReader sm = ior.child("sellmeier");
+      const auto B = sm.get_floats("B", {}, 3), C = sm.get_floats("C", {}, 3);
+      if (B.size() != 3 || C.size() != 3) sm.fail("", "needs three B and three C coefficients");
+      sm.finish();
+      ior.finish();
+      d.ior = Sellmeier{{B[0], B[1], B[2]}, {C[0], C[1], C[2]}};
+    } else {
+      d.ior = m.get_float("ior", 1.5f, 1e-3f, 10.f);
+    }
+    result = d;
+  }
+  m.finish();
+  return result;
+}
+
+Transform read_transform(ParamReader& shape, float unit) {
+  auto t = shape.optional_child("transform");
+  if (!t) return {};
+  Transform result;
+  try {
+    if (t->has("scale")) {
+      if (t->raw("scale").is_number()) result = Transform::scale(Vec3(t->require_float("scale")));
+      else result = Transform::scale(t->require_vec3("scale"));
+    }
+    if (t->has("rotate")) {
+      const auto r = t->get_floats("rotate", {}, 4);
+      if (r.size() != 4) t->fail("rotate", "expected [degrees, axis_x, axis_y, axis_z]");
+      result = Transform::rotate(r[0], {r[1], r[2], r[3]}) * result;
+    }
+    if (t->has("translate")) result = Transform::translate(t->require_vec3("translate") * unit) * result;
+  } catch (const std::domain_error& e) {
+    t->fail("", e.what());
+  }
+  t->finish();
+  return result;
+}
+
+// Positions given in the file's length unit: scale object space to metres first.
+TriangleMesh read_shape_mesh(ParamReader& sh, const std::string& type, float unit) {
+  switch (type[0]) {
+    case 'q':
+      return make_quad(sh.require_vec3("corner") * unit, sh.require_vec3("edge_u") * unit,
+                       sh.require_vec3("edge_v") * unit);
+    case 'b': {
+      Bounds3 b;
+      b.lo = sh.require_vec3("min") * unit;
+      b.hi = sh.require_vec3("max") * unit;
+      if (b.empty()) sh.fail("max", "must be greater than \"min\" on every axis");
+      return make_box(b);
+    }
+    case 'd':
+      return make_disk(sh.get_vec3("center", {}) * unit, sh.get_vec3("normal", {0, 1, 0}),
+                       sh.require_float("radius", 1e-30f) * unit, 64);
+    default: {
+      const auto path = sh.require_path("file");
+      MeshLoadInfo info;
+      TriangleMesh mesh = load_mesh(path, &info);
+      if (unit != 1.f) mesh = transform_mesh(std::move(mesh), Transform::scale(Vec3(unit)));
+      return mesh;
+    }
+  }
+}
+
+Light read_light(ParamReader& l, float unit) {
+  const std::string type = l.get_enum("type", "point", {"point", "spot", "distant", "environment"});
+  Spectrum spectrum = read_spectrum(l, "spectrum", named_spectrum("D65"));
+  const float scale = l.get_float("scale", 1.f, 0.f);
+  if (l.get_bool("normalize", false)) {
+    const float Y = luminance(spectrum);
+    if (!(Y > 0.f)) l.fail("normalize", "the spectrum has no luminance (it emits nothing visible)");
+    spectrum = spectrum.scaled(1.f / Y);
+  }
+  Light light = PointLight{};
+  if (type == "point") {
+    light = PointLight{l.require_vec3("position") * unit, spectrum, scale};
+  } else if (type == "spot") {
+    const Vec3 p = l.require_vec3("position") * unit;
+    const Vec3 target = l.require_vec3("look_at") * unit;
+    const float cone = l.get_float("cone_angle", 30.f, 1e-3f, 180.f);
+    const float falloff = l.get_float("falloff_angle", 5.f, 0.f, cone);
+    const float deg = kPi / 180.f;
+    light = SpotLight{p, target - p, std::cos((cone - falloff) * deg), std::cos(cone * deg), spectrum, scale};
+  } else if (type == "distant") {
+    const Vec3 d = l.require_vec3("direction");
+    if (length(d) == 0.f) l.fail("direction", "must not be the zero vector");
+    light = DistantLight{normalize(d), spectrum, scale};
+  } else {
+    light = EnvironmentLight{spectrum, scale};
+  }
+  l.finish();
+  return light;
+}
+
+// Does any medium scatter, any surface reflect, or any fluorescent pigment
+// absorb what a fluorescent pigment emits? If none, direct excitation is exact.
+std::string why_direct_is_not_exact(const Scene& scene) {
+  for (size_t m = 0; m < scene.media.size(); ++m)
+    if (can_scatter(scene.media[m])) return fmt::format("medium \"{}\" scatters", scene.medium_names[m]);
+  for (size_t s = 0; s < scene.shapes.size(); ++s) {
+    const ShapeBinding& b = scene.shapes[s];
+    if (b.material >= 0 && !is_interface(scene.materials[b.material]))
+      return "surfaces reflect or refract excitation light";
+  }
+  for (const auto& medium : scene.fluorescence)
+    for (const FluorescentPigment& emitter : medium)
+      for (const auto& other : scene.fluorescence)
+        for (const FluorescentPigment& absorber : other) {
+          // Reabsorption: ∫ f_emitter(λ) ε_absorber(λ) dλ > 0.
+          double overlap = 0;
+          for (float l = kLambdaMinUV; l < kLambdaMax; l += 1.f) overlap += emitter.emission(l) * absorber.epsilon(l);
+          if (overlap > 0) return "fluorescent pigments reabsorb emitted light";
+        }
+  return {};
+}
+
+void setup_fluorescence(Scene& scene, const std::string& mode) {
+  for (size_t m = 0; m < scene.media.size(); ++m) {
+    for (FluorescentPigment& fp : scene.fluorescence[m]) {
+      std::vector<float> weights;
+      for (size_t l = 0; l < scene.lights.size(); ++l) {
+        const Light& light = scene.lights[l];
+        ExcitationSampler es(emission_spectrum(light), fp.epsilon);
+        if (!es.can_excite() || light_scale(light) == 0.f) continue;  // dark in the excitation band
+        // Weight: the light's power times the share of its spectrum the pigment can absorb.
+        const float in_band = es.total() / std::max(1e-30f, emission_spectrum(light).integral(kLambdaMinUV, kLambdaMax));
+        const float w = phi_power(light, scene.geometry) * in_band;
+        if (!(w > 0.f)) continue;
+        fp.lights.push_back(int(l));
+        fp.excitation.push_back(std::move(es));
+        weights.push_back(w);
+      }
+      if (!fp.lights.empty()) fp.light_sampler = LightSampler(fp.lights, weights);
+    }
+  }
+  RenderSettings& s = scene.settings;
+  if (mode == "off") {
+    s.fluorescence = FluorescenceMode::off;
+    s.fluorescence_auto = false;
+  } else if (mode == "direct" || mode == "full" || mode == "reference") {
+    s.fluorescence = mode == "direct" ? FluorescenceMode::direct
+                     : mode == "full" ? FluorescenceMode::full
+                                      : FluorescenceMode::reference;
+    s.fluorescence_auto = false;
+    const std::string why = why_direct_is_not_exact(scene);
+    s.fluorescence_reason = mode == "direct" && !why.empty() ? "requested; an approximation here: " + why
+                                                             : "requested";
+  } else {
+    const std::string why = why_direct_is_not_exact(scene);
+    s.fluorescence = why.empty() ? FluorescenceMode::direct : FluorescenceMode::full;
+    s.fluorescence_reason = why.empty() ? "auto: exact here, nothing scatters, reflects or reabsorbs"
+                                        : "auto: " + why;
+  }
+  // Pigments no light can excite cost nothing: drop them unless another
+  // pigment's fluorescence might excite them (full mode follows that light).
+  for (auto& medium : scene.fluorescence)
+    std::erase_if(medium, [&](const FluorescentPigment& fp) {
+      return fp.lights.empty() && s.fluorescence != FluorescenceMode::full;
+    });
+}
+
+}  // namespace
+
+Scene load_scene(const std::filesystem::path& file, const SceneOverrides& overrides) {
+  const nlohmann::json json = ParamReader::parse_file(file);
+  ParamReader top(json, file, "");
+  const float unit = length_unit_in_metres(top);
+  std::string fluorescence_mode, transmittance;
+  const RenderSettings settings = read_render_settings(top, overrides, &fluorescence_mode, &transmittance);
+  Scene scene(read_camera(top, settings, unit));
+  scene.file = file;
+  scene.settings = settings;
+
+  // Pigments and media.
+  const PigmentTable pigments = read_pigments(top);
+  NameTable media;
+  GridCache grids;
+  for (auto& [name, m] : top.children_map("media")) {
+    MediumDefinition def = read_medium(m, pigments, grids);
+    media.add(name, int(scene.media.size()));
+    scene.media.push_back(std::move(def.medium));
+    scene.medium_names.push_back(name);
+    scene.fluorescence.push_back(std::move(def.fluorescent));
+  }
+
+  NameTable materials;
+  for (auto& [name, m] : top.children_map("materials")) {
+    materials.add(name, int(scene.materials.size()));
+    scene.materials.push_back(read_material(m));
+  }
+
+  // Shapes (and their area lights).
+  std::vector<bool> medium_bounded(scene.media.size(), false);
+  for (ParamReader& sh : top.children_array("shapes")) {
+    const std::string type = sh.get_enum("type", "", {"quad", "box", "disk", "sphere", "mesh"});
+    const Transform world_from_object = read_transform(sh, unit);
+    ShapeBinding b;
+    int id;
+    bool closed;
+    if (type == "sphere") {
+      if (!world_from_object.is_identity()) sh.fail("transform", "spheres take \"center\" and \"radius\" only");
+      id = scene.geometry.add_sphere(sh.get_vec3("center", {}) * unit, sh.require_float("radius", 1e-30f) * unit);
+      closed = true;
+    } else {
+      TriangleMesh mesh = read_shape_mesh(sh, type, unit);
+      closed = is_closed(mesh);
+      id = scene.geometry.add_mesh(std::move(mesh), world_from_object);
+    }
+    if (sh.has("material")) b.material = materials.find(sh, "material", "material");
+    if (sh.has("inside")) b.medium_inside = media.find(sh, "inside", "medium");
+    if (sh.has("outside")) b.medium_outside = media.find(sh, "outside", "medium");
+    if (b.medium_inside >= 0) {
+      if (!closed) sh.fail("inside", "the shape is not closed, so it has no inside to fill");
+      medium_bounded[b.medium_inside] = true;
+    }
+    if (auto e = sh.optional_child("emission")) {
+      AreaLight light{id, read_spectrum(*e, "spectrum", named_spectrum("D65")), e->get_float("scale", 1.f, 0.f),
+                      e->get_bool("two_sided", false)};
+      e->finish();
+      b.area_light = int(scene.lights.size());
+      scene.lights.push_back(light);
+    }
+    if (b.material < 0 && b.area_light < 0 && b.medium_inside < 0 && b.medium_outside < 0)
+      sh.fail("material", "a shape needs a material, an emission or a medium");
+    sh.finish();
+    if (int(scene.shapes.size()) != id) throw std::logic_error("shape ids must be dense");
+    scene.shapes.push_back(b);
+  }
+  // A grid medium no shape bounds fills its grid's world box, behind an invisible interface.
+  for (size_t m = 0; m < scene.media.size(); ++m) {
+    if (medium_bounded[m]) continue;
+    const std::optional<Bounds3> box = medium_bounds(scene.media[m]);
+    if (!box) continue;
+    const int id = scene.geometry.add_mesh(make_box(*box));
+    ShapeBinding b;
+    b.medium_inside = int(m);
+    scene.shapes.push_back(b);
+    if (int(scene.shapes.size()) != id + 1) throw std::logic_error("shape ids must be dense");
+  }
+  if (top.has("camera_medium")) scene.camera_medium = media.find(top, "camera_medium", "medium");
+
+  for (ParamReader& l : top.children_array("lights")) scene.lights.push_back(read_light(l, unit));
+  top.finish();
+
+  scene.geometry.commit();
+  const Bounds3 bounds = scene.geometry.bounds();
+  for (size_t l = 0; l < scene.lights.size(); ++l) {
+    preprocess(scene.lights[l], bounds);
+    if (std::holds_alternative<EnvironmentLight>(scene.lights[l])) scene.infinite_lights.push_back(int(l));
+  }
+  scene.light_sampler = LightSampler::power(scene.lights, scene.geometry);
+  setup_fluorescence(scene, fluorescence_mode);
+  return scene;
+}
+
+}  // namespace chlorovdb

@@ -1,0 +1,70 @@
+#pragma once
+// Scenes for integrator tests, written as JSON so the loader is exercised too.
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+
+#include "integrator/path_tracer.h"
+#include "scene/scene_loader.h"
+
+namespace chlorovdb::test {
+
+inline std::filesystem::path write_scene(const std::string& name, const std::string& json) {
+  const auto dir = std::filesystem::temp_directory_path() / "chlorovdb_integrator_tests";
+  std::filesystem::create_directories(dir);
+  const auto path = dir / (name + ".json");
+  std::ofstream(path) << json;
+  return path;
+}
+
+// Mean and standard error of a scalar estimator.
+struct Estimate {
+  double sum = 0, sum2 = 0;
+  long n = 0;
+  void add(double x) {
+    sum += x;
+    sum2 += x * x;
+    ++n;
+  }
+  double mean() const { return sum / n; }
+  double sigma() const { return std::sqrt(std::max(0.0, sum2 / n - mean() * mean()) / n); }
+};
+
+// Slab of pigment solution, index-matched (interface box), thickness D metres,
+// wide enough that its edges do not matter, lit at normal incidence by a
+// distant light travelling along -z onto the face z = D. The pigment absorbs
+// only where the light shines (a table that ends before the emission band).
+struct SlabSetup {
+  double D = 0.01;             // m
+  double concentration = 20;   // µM
+  double epsilon = 20000;      // L/mol/cm, flat over [eps_lo, eps_hi]
+  double eps_lo = 380, eps_hi = 480;
+  std::string light = "{\"gaussian\": [420, 8]}";
+  double Q = 0.5;
+  std::string mode = "direct";
+};
+
+inline std::string slab_scene_json(const SlabSetup& s) {
+  char buf[4096];
+  std::snprintf(buf, sizeof buf, R"({
+  "render": {"resolution": [8, 8], "spp": 1, "wavelengths": 4, "fluorescence": "%s", "max_depth": 64},
+  "camera": {"type": "orthographic", "position": [0, 0, 1], "look_at": [0, 0, 0], "height": 0.01},
+  "pigments": {"dye": {
+    "extinction": {"table": {"lambda": [%g, %g, %g, %g], "value": [0, %g, %g, 0]}},
+    "quantum_yield": %g, "emission": {"gaussian": [650, 10]}}},
+  "materials": {"boundary": {"type": "interface"}},
+  "media": {"solution": {"solvent": "none",
+    "pigments": [{"pigment": "dye", "concentration": %g, "unit": "uM"}]}},
+  "shapes": [{"type": "box", "min": [-10, -10, 0], "max": [10, 10, %g],
+              "material": "boundary", "inside": "solution"}],
+  "lights": [{"type": "distant", "direction": [0, 0, -1], "spectrum": %s, "scale": 1}]
+})",
+                s.mode.c_str(), s.eps_lo - 1e-3, s.eps_lo, s.eps_hi, s.eps_hi + 1e-3, s.epsilon, s.epsilon, s.Q,
+                s.concentration, s.D, s.light.c_str());
+  return buf;
+}
+
+}  // namespace chlorovdb::test

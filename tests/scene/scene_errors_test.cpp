@@ -1,0 +1,135 @@
+// Bad scene files give one clear error naming the file, the key path and the
+// value (and the nearest valid key or name), never a crash or a silent default.
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "core/error.h"
+#include "scene/scene_loader.h"
+
+using namespace chlorovdb;
+
+namespace {
+
+std::filesystem::path write(const std::string& name, const std::string& text) {
+  const auto dir = std::filesystem::temp_directory_path() / "chlorovdb_scene_tests";
+  std::filesystem::create_directories(dir);
+  const auto path = dir / name;
+  std::ofstream(path) << text;
+  return path;
+}
+
+// Loads `json` and returns the error message ("" if it loaded).
+std::string load_error(const std::string& json, const std::string& name = "bad.json") {
+  try {
+    load_scene(write(name, json));
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+const std::string kCamera = R"("camera": {"position": [0, 0, 3], "look_at": [0, 0, 0]})";
+
+std::string scene_with(const std::string& body) { return "{" + kCamera + (body.empty() ? "" : ", " + body) + "}"; }
+
+}  // namespace
+
+TEST(SceneErrors, MinimalSceneLoads) { EXPECT_EQ(load_error(scene_with("")), ""); }
+
+TEST(SceneErrors, MalformedJsonNamesFileLineAndColumn) {
+  const std::string msg = load_error("{\n  \"camera\": {\"position\": [0, 0, 3],,}\n}", "malformed.json");
+  EXPECT_NE(msg.find("malformed.json:2:"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("malformed JSON"), std::string::npos) << msg;
+}
+
+TEST(SceneErrors, UnknownKeySuggestsTheNearestValidOne) {
+  const std::string msg = load_error(R"({"camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "fvo": 30}})");
+  EXPECT_NE(msg.find("bad.json"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("camera.fvo"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("did you mean \"fov\""), std::string::npos) << msg;
+}
+
+TEST(SceneErrors, UnknownTopLevelKey) {
+  const std::string msg = load_error(scene_with(R"("light": [])"));
+  EXPECT_NE(msg.find("light"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("did you mean \"lights\""), std::string::npos) << msg;
+}
+
+TEST(SceneErrors, WrongTypeNamesKeyAndValue) {
+  const std::string msg = load_error(scene_with(R"("render": {"spp": "many"})"));
+  EXPECT_NE(msg.find("render.spp = \"many\""), std::string::npos) << msg;
+  EXPECT_NE(msg.find("integer"), std::string::npos) << msg;
+}
+
+TEST(SceneErrors, QuantumYieldOutsideUnitInterval) {
+  const std::string msg =
+      load_error(scene_with(R"("pigments": {"chl": {"extinction": "chlorophyll_a", "quantum_yield": 1.5}})"));
+  EXPECT_NE(msg.find("pigments.chl.quantum_yield = 1.5"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("[0, 1]"), std::string::npos) << msg;
+}
+
+TEST(SceneErrors, NegativeConcentration) {
+  const std::string msg = load_error(scene_with(R"(
+    "pigments": {"chl": {"extinction": "chlorophyll_a"}},
+    "media": {"m": {"pigments": [{"pigment": "chl", "concentration": -5}]}})"));
+  EXPECT_NE(msg.find("concentration = -5"), std::string::npos) << msg;
+}
+
+TEST(SceneErrors, UnknownMaterialNameSuggestsNearest) {
+  const std::string msg = load_error(scene_with(R"(
+    "materials": {"white": {"type": "diffuse"}},
+    "shapes": [{"type": "sphere", "radius": 1, "material": "whit"}])"));
+  EXPECT_NE(msg.find("shapes[0].material = \"whit\""), std::string::npos) << msg;
+  EXPECT_NE(msg.find("did you mean \"white\""), std::string::npos) << msg;
+}
+
+TEST(SceneErrors, UnknownEnumValue) {
+  const std::string msg = load_error(scene_with(R"("render": {"fluorescence": "drect"})"));
+  EXPECT_NE(msg.find("render.fluorescence"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("did you mean \"direct\""), std::string::npos) << msg;
+}
+
+TEST(SceneErrors, MissingMeshFileNamesTheFile) {
+  const std::string msg = load_error(scene_with(R"(
+    "materials": {"white": {"type": "diffuse"}},
+    "shapes": [{"type": "mesh", "file": "no_such_mesh.obj", "material": "white"}])"));
+  EXPECT_NE(msg.find("no_such_mesh.obj"), std::string::npos) << msg;
+}
+
+TEST(SceneErrors, MissingGridFileNamesTheFile) {
+  const std::string msg = load_error(scene_with(R"(
+    "pigments": {"chl": {"extinction": "chlorophyll_a"}},
+    "media": {"m": {"pigments": [{"pigment": "chl", "grid": {"file": "missing.vdb", "name": "c"}}]}})"));
+  EXPECT_NE(msg.find("missing.vdb"), std::string::npos) << msg;
+}
+
+TEST(SceneErrors, UnsortedSpectrumTableNamesScenePath) {
+  const auto csv = write("unsorted.csv", "wavelength_nm,value\n500,1\n400,2\n600,3\n");
+  const std::string msg = load_error(scene_with(
+      R"("lights": [{"type": "point", "position": [0, 1, 0], "spectrum": ")" + csv.string() + R"("}])"));
+  EXPECT_NE(msg.find("unsorted.csv"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("lights[0].spectrum"), std::string::npos) << msg;
+}
+
+TEST(SceneErrors, OpenMeshCannotHoldAMedium) {
+  const std::string msg = load_error(scene_with(R"(
+    "materials": {"b": {"type": "interface"}},
+    "media": {"m": {"solvent": "water"}},
+    "shapes": [{"type": "quad", "corner": [0, 0, 0], "edge_u": [1, 0, 0], "edge_v": [0, 1, 0],
+                "material": "b", "inside": "m"}])"));
+  EXPECT_NE(msg.find("shapes[0].inside"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("not closed"), std::string::npos) << msg;
+}
+
+TEST(SceneErrors, CommandLineOverrideIsChecked) {
+  SceneOverrides o;
+  o.fluorescence = "ful";
+  try {
+    load_scene(write("ok.json", scene_with("")), o);
+    FAIL() << "expected an error";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--fluorescence = ful"), std::string::npos) << e.what();
+  }
+}
