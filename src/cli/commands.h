@@ -1,23 +1,18 @@
 #pragma once
-// One function per subcommand; main.cpp only wires them to CLI11.
-#include <filesystem>
-#include <optional>
-#include <string>
+// One file per subcommand; each registers itself on the CLI11 app and returns
+// the function main() calls when its subcommand was chosen.
+#include <functional>
+
+#include <CLI/CLI.hpp>
 
 namespace chlorovdb::cli {
 
-struct RenderArgs {
-  std::filesystem::path scene;
-  std::filesystem::path output;  // .exr; the PNG preview goes beside it
-  std::optional<int> spp, threads, wavelengths;
-  std::optional<uint64_t> seed;
-  std::optional<std::string> resolution;  // "WxH"
-  std::optional<float> exposure;
-  std::optional<std::string> fluorescence, transmittance;
-  bool quiet = false;
+struct Command {
+  CLI::App* subcommand;    // as registered on the app
+  std::function<int()> run;  // called when that subcommand was given
 };
 
-int render(const RenderArgs& args);
-int info(const std::filesystem::path& vdb_file);
+Command add_render_command(CLI::App& app);
+Command add_info_command(CLI::App& app);
 
 }  // namespace chlorovdb::cli

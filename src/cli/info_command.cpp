@@ -7,6 +7,8 @@
 
 namespace chlorovdb::cli {
 
+namespace {
+
 int info(const std::filesystem::path& vdb_file) {
   const GridReport report = inspect_vdb(vdb_file);
   fmt::print("{}: {} grid{}\n", report.file, report.grids.size(), report.grids.size() == 1 ? "" : "s");
@@ -38,6 +40,15 @@ int info(const std::filesystem::path& vdb_file) {
       fmt::print("  warning: {} negative values (a concentration cannot be negative)\n", g.invalid.negative), ++warnings;
   }
   return warnings > 0 ? 2 : 0;
+}
+
+}  // namespace
+
+Command add_info_command(CLI::App& app) {
+  auto file = std::make_shared<std::filesystem::path>();
+  CLI::App* sub = app.add_subcommand("info", "List the grids of a .vdb file and check their values");
+  sub->add_option("file", *file, ".vdb file")->required();
+  return {sub, [file] { return info(*file); }};
 }
 
 }  // namespace chlorovdb::cli

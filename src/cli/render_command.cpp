@@ -43,7 +43,40 @@ const char* mode_name(FluorescenceMode m) {
   return "?";
 }
 
+struct RenderArgs {
+  std::filesystem::path scene;
+  std::filesystem::path output;  // .exr; the PNG preview goes beside it
+  std::optional<int> spp, threads, wavelengths;
+  std::optional<uint64_t> seed;
+  std::optional<std::string> resolution;  // "WxH"
+  std::optional<float> exposure;
+  std::optional<std::string> fluorescence, transmittance;
+  bool quiet = false;
+};
+
+int render(const RenderArgs& a);
+
 }  // namespace
+
+Command add_render_command(CLI::App& app) {
+  auto args = std::make_shared<RenderArgs>();
+  RenderArgs& r = *args;
+  CLI::App* sub = app.add_subcommand("render", "Render a scene to a linear EXR and a PNG preview");
+  sub->add_option("scene", r.scene, "Scene file (JSON, docs/scene-format.md)")->required()->check(CLI::ExistingFile);
+  sub->add_option("-o,--output", r.output, "Output EXR (default: the scene's name in the current folder)");
+  sub->add_option("--spp", r.spp, "Samples per pixel")->check(CLI::Range(1, 1 << 24));
+  sub->add_option("--threads", r.threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 1024));
+  sub->add_option("--seed", r.seed, "Seed of the per-pixel random streams");
+  sub->add_option("--resolution", r.resolution, "Image size WxH, e.g. 640x480");
+  sub->add_option("--wavelengths", r.wavelengths, "Wavelengths per camera path")->check(CLI::Range(1, 16));
+  sub->add_option("--exposure", r.exposure, "PNG preview exposure in stops");
+  sub->add_option("--fluorescence", r.fluorescence, "auto | direct | full | reference | off");
+  sub->add_option("--transmittance", r.transmittance, "auto | ratio | residual_ratio | delta");
+  sub->add_flag("-q,--quiet", r.quiet, "No progress bar");
+  return {sub, [args] { return render(*args); }};
+}
+
+namespace {
 
 int render(const RenderArgs& a) {
   SceneOverrides o;
@@ -58,6 +91,7 @@ int render(const RenderArgs& a) {
 
   std::filesystem::path out = a.output.empty() ? std::filesystem::path(a.scene.stem().string() + ".exr") : a.output;
   if (out.extension() != ".exr") out += ".exr";
+  if (out.has_parent_path()) std::filesystem::create_directories(out.parent_path());
   std::filesystem::path png = out;
   png.replace_extension(".png");
 
@@ -105,4 +139,5 @@ int render(const RenderArgs& a) {
   return stats.interrupted ? 130 : 0;
 }
 
+}  // namespace
 }  // namespace chlorovdb::cli
