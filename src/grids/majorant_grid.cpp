@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <vector>
 
 #include <tbb/parallel_for.h>
 
@@ -65,7 +66,7 @@ MajorantGrid::MajorantGrid(std::span<const VoxelGrid* const> channels, int voxel
 
   const size_t cells = size_t(res_[0]) * res_[1] * res_[2];
   bounds_.resize(cells * stride());
-  empty_.resize(cells);
+  empty_radius_.resize(cells);
   tbb::parallel_for(size_t(0), cells, [&](size_t i) {
     const Coord c{int(i % res_[0]), int(i / res_[0] % res_[1]), int(i / (size_t(res_[0]) * res_[1]))};
     const Vec3 lo = origin_ + Vec3(float(c[0]), float(c[1]), float(c[2])) * float(voxels_per_cell);
@@ -79,8 +80,35 @@ MajorantGrid::MajorantGrid(std::span<const VoxelGrid* const> channels, int voxel
       bounds_[i * stride() + channels_ + k] = mn;
       if (mx != 0.f) empty = false;
     }
-    empty_[i] = empty;
+    empty_radius_[i] = empty ? 255 : 0;
   });
+  compute_empty_radii();
+}
+
+// Multi-source breadth-first search from the non-empty cells over the 26
+// neighbours: the number of steps is exactly the Chebyshev distance.
+void MajorantGrid::compute_empty_radii() {
+  std::vector<int64_t> frontier, next;
+  for (size_t i = 0; i < empty_radius_.size(); ++i)
+    if (empty_radius_[i] == 0) frontier.push_back(int64_t(i));
+  for (int r = 1; r < 255 && !frontier.empty(); ++r) {
+    next.clear();
+    for (const int64_t i : frontier) {
+      const Coord c{int(i % res_[0]), int(i / res_[0] % res_[1]), int(i / (int64_t(res_[0]) * res_[1]))};
+      for (int dz = -1; dz <= 1; ++dz)
+        for (int dy = -1; dy <= 1; ++dy)
+          for (int dx = -1; dx <= 1; ++dx) {
+            const Coord n{c[0] + dx, c[1] + dy, c[2] + dz};
+            if (n[0] < 0 || n[1] < 0 || n[2] < 0 || n[0] >= res_[0] || n[1] >= res_[1] || n[2] >= res_[2]) continue;
+            uint8_t& radius = empty_radius_[cell_index(n)];
+            if (radius == 255) {
+              radius = uint8_t(r);
+              next.push_back(int64_t(cell_index(n)));
+            }
+          }
+    }
+    std::swap(frontier, next);
+  }
 }
 
 Bounds3 MajorantGrid::index_bounds() const {
@@ -92,33 +120,35 @@ MajorantIterator::MajorantIterator(const MajorantGrid* grid, const Ray& ray_inde
     : grid_(grid), t_max_(t_max), stage_(Stage::before) {
   // Cell coordinates: the parameter t is the same in both spaces.
   const float s = grid->inv_cell_size_;
-  const Ray r{(ray_index.o - grid->origin_) * s, ray_index.d * s};
+  ray_cells_ = Ray{(ray_index.o - grid->origin_) * s, ray_index.d * s};
   const Bounds3 box{{0, 0, 0}, {float(grid->res_[0]), float(grid->res_[1]), float(grid->res_[2])}};
-  if (grid->res_[0] == 0 || !intersect_bounds(box, r, t_max, &t_enter_, &t_exit_)) {
+  if (grid->res_[0] == 0 || !intersect_bounds(box, ray_cells_, t_max, &t_enter_, &t_exit_)) {
     t_enter_ = t_exit_ = t_max;  // the whole ray is one stretch outside the cells
     return;
   }
-  t_ = t_enter_;
-  const Vec3 p = r.at(t_enter_);
+  const int64_t stride[3] = {1, grid->res_[0], int64_t(grid->res_[0]) * grid->res_[1]};
   for (int a = 0; a < 3; ++a) {
-    cell_[a] = std::clamp(int(std::floor(p[a])), 0, grid->res_[a] - 1);
-    if (r.d[a] > 0.f) {
-      next_crossing_[a] = t_enter_ + (float(cell_[a] + 1) - p[a]) / r.d[a];
-      delta_t_[a] = 1.f / r.d[a];
-      step_[a] = 1;
-      stop_[a] = grid->res_[a];
-    } else if (r.d[a] < 0.f) {
-      next_crossing_[a] = t_enter_ + (float(cell_[a]) - p[a]) / r.d[a];
-      delta_t_[a] = -1.f / r.d[a];
-      step_[a] = -1;
-      stop_[a] = -1;
-    } else {  // axis-parallel: never crosses a plane of this axis
-      next_crossing_[a] = 3e38f;
-      delta_t_[a] = 0.f;
-      step_[a] = 0;
-      stop_[a] = -2;
-    }
+    const float d = ray_cells_.d[a];
+    // Axis-parallel rays never cross a plane of that axis.
+    step_[a] = d > 0.f ? 1 : (d < 0.f ? -1 : 0);
+    stop_[a] = d > 0.f ? grid->res_[a] : (d < 0.f ? -1 : -2);
+    inv_d_[a] = d != 0.f ? 1.f / d : 0.f;
+    delta_t_[a] = std::fabs(inv_d_[a]);
+    index_step_[a] = step_[a] * stride[a];
   }
+  enter_cells(t_enter_);
+}
+
+void MajorantIterator::enter_cells(float t) {
+  t_ = t;
+  const Vec3 p = ray_cells_.at(t);
+  for (int a = 0; a < 3; ++a) {
+    cell_[a] = std::clamp(int(std::floor(p[a])), 0, grid_->res_[a] - 1);
+    if (step_[a] > 0) next_crossing_[a] = t + (float(cell_[a] + 1) - p[a]) * inv_d_[a];
+    else if (step_[a] < 0) next_crossing_[a] = t + (float(cell_[a]) - p[a]) * inv_d_[a];
+    else next_crossing_[a] = 3e38f;
+  }
+  index_ = int64_t(grid_->cell_index(cell_));
 }
 
 bool MajorantIterator::pull(Piece* piece) {
@@ -131,13 +161,36 @@ bool MajorantIterator::pull(Piece* piece) {
       }
       return pull(piece);
     case Stage::cells: {
+      const int64_t index = index_;
+      // Leave the empty cube of half-width r - 1 around this cell in one step.
+      // A jump restarts the DDA, which costs about what two or three ordinary
+      // steps do, so only jump when the cube reaches at least two cells ahead.
+      if (const int r = grid_->empty_radius_[index]; r >= 3) {
+        float t_jump = t_exit_;
+        for (int a = 0; a < 3; ++a) {
+          if (step_[a] == 0) continue;
+          const float face = float(step_[a] > 0 ? cell_[a] + r : cell_[a] - r + 1);
+          t_jump = std::min(t_jump, (face - ray_cells_.o[a]) * inv_d_[a]);
+        }
+        if (t_jump > t_) {  // else rounding left no room: take an ordinary step
+          *piece = {t_, t_jump, index};
+          if (t_jump >= t_exit_) {
+            t_exit_ = t_jump;
+            stage_ = Stage::after;
+          } else {
+            enter_cells(t_jump);
+          }
+          return true;
+        }
+      }
       const int a = next_crossing_[0] < next_crossing_[1] ? (next_crossing_[0] < next_crossing_[2] ? 0 : 2)
                                                           : (next_crossing_[1] < next_crossing_[2] ? 1 : 2);
       // Rounding can put a crossing a hair behind t_: never step backwards.
       const float t_end = std::max(t_, std::min(next_crossing_[a], t_exit_));
-      *piece = {t_, t_end, int64_t(grid_->cell_index(cell_))};
+      *piece = {t_, t_end, index};
       t_ = t_end;
       cell_[a] += step_[a];
+      index_ += index_step_[a];
       next_crossing_[a] += delta_t_[a];
       if (t_end >= t_exit_ || cell_[a] == stop_[a]) {
         t_exit_ = t_end;  // the stretch after the cells starts exactly where the last cell ended

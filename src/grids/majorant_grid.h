@@ -8,8 +8,11 @@
 //
 // MajorantIterator walks the cells a ray crosses (3-D DDA, Amanatides & Woo)
 // and yields segments in the ray's own parameter t. Runs of cells whose maxima
-// are all zero come out merged as one segment, so empty space costs one step
-// per cell and nothing per unit length.
+// are all zero come out merged as one segment. Empty space is crossed in jumps:
+// each empty cell knows its Chebyshev distance r (in cells) to the nearest
+// non-empty one, so the cube of half-width r - 1 around it is empty and the
+// ray leaves that cube in one step. A jump lands a hair short of a non-empty
+// cell at worst, which the one-voxel dilation of the bounds already covers.
 #include <array>
 #include <optional>
 #include <span>
@@ -50,10 +53,11 @@ class MajorantGrid {
   Bounds3 index_bounds() const;
   float cell_max(Coord cell, int channel) const { return bounds_[cell_index(cell) * stride() + channel]; }
   float cell_min(Coord cell, int channel) const { return bounds_[cell_index(cell) * stride() + channels_ + channel]; }
-  size_t memory_bytes() const { return bounds_.size() * sizeof(float) + empty_.size(); }
+  size_t memory_bytes() const { return bounds_.size() * sizeof(float) + empty_radius_.size(); }
 
  private:
   friend class MajorantIterator;
+  void compute_empty_radii();
   int stride() const { return 2 * channels_; }
   size_t cell_index(Coord c) const { return c[0] + size_t(res_[0]) * (c[1] + size_t(res_[1]) * c[2]); }
 
@@ -62,8 +66,10 @@ class MajorantGrid {
   Coord res_{0, 0, 0};
   Vec3 origin_;                 // majorant index-space corner of cell (0,0,0)
   float inv_cell_size_ = 1.f;   // 1 / voxels_per_cell
-  std::vector<float> bounds_;   // per cell: c_max[channels], then c_min[channels]
-  std::vector<uint8_t> empty_;  // per cell: every channel's max is 0
+  std::vector<float> bounds_;          // per cell: c_max[channels], then c_min[channels]
+  // Per cell: 0 if some channel's max is non-zero; else the Chebyshev distance in
+  // cells to the nearest such cell (capped at 255; 255 too if there is none).
+  std::vector<uint8_t> empty_radius_;
   std::array<float, kMaxMajorantChannels> background_{};
   bool background_empty_ = true;
 };
@@ -83,15 +89,22 @@ class MajorantIterator {
     int64_t cell;
   };
   bool pull(Piece* piece);
-  bool empty(const Piece& p) const { return p.cell < 0 ? grid_->background_empty_ : grid_->empty_[p.cell]; }
+  bool empty(const Piece& p) const {
+    return p.cell < 0 ? grid_->background_empty_ : grid_->empty_radius_[p.cell] > 0;
+  }
   MajorantSegment segment(const Piece& p) const;
+  // (Re)start the DDA in the cell holding the ray at parameter t.
+  void enter_cells(float t);
 
   const MajorantGrid* grid_ = nullptr;
   float t_max_ = 0.f;
   float t_enter_ = 0.f, t_exit_ = 0.f;  // the ray inside the cells
   enum class Stage : uint8_t { before, cells, after, done } stage_ = Stage::done;
-  // DDA state (cell coordinates).
+  // DDA state, in cell coordinates.
+  Ray ray_cells_;
+  float inv_d_[3] = {};  // 1 / ray_cells_.d (0 on axes the ray is parallel to)
   Coord cell_{}, step_{}, stop_{};
+  int64_t index_ = 0, index_step_[3] = {};  // linear index of cell_ and its change per step
   float next_crossing_[3] = {}, delta_t_[3] = {};
   float t_ = 0.f;
   std::optional<Piece> pending_;

@@ -106,6 +106,43 @@ TEST(MajorantGrid, NoLookupExceedsItsSegmentBounds) {
   EXPECT_GT(checked, 1000000);
 }
 
+TEST(MajorantGrid, JumpsOverEmptySpaceKeepTheBoundsAndTheTiling) {
+  // A large, nearly empty grid: most cells are far from any data, so the DDA
+  // crosses them in jumps. Every lookup must still respect its segment.
+  DenseGrid d({150, 120, 130});
+  Rng rng(7, 0);
+  for (int b = 0; b < 12; ++b) {
+    const int x0 = int(rng.uniform() * 145.f), y0 = int(rng.uniform() * 115.f), z0 = int(rng.uniform() * 125.f);
+    for (int z = z0; z < z0 + 4; ++z)
+      for (int y = y0; y < y0 + 4; ++y)
+        for (int x = x0; x < x0 + 4; ++x) d.at(x, y, z) = 1.f + rng.uniform();
+  }
+  const VoxelGrid g = VoxelGrid::from_dense(d);
+  const VoxelGrid* channels[] = {&g};
+  int64_t nonzero = 0;
+  for (int voxels_per_cell : {1, 4, 8}) {
+    const MajorantGrid m(channels, voxels_per_cell);
+    for (int i = 0; i < 3000; ++i) {
+      const Ray r = random_ray(m.index_bounds(), rng, i % 5 == 0);
+      const auto segs = collect(m, r, 600.f);
+      ASSERT_EQ(segs.front().t_min, 0.f);
+      ASSERT_EQ(segs.back().t_max, 600.f);
+      for (size_t s = 0; s < segs.size(); ++s) {
+        if (s > 0) {
+          ASSERT_EQ(segs[s].t_min, segs[s - 1].t_max);
+        }
+        for (int k = 0; k < 16; ++k) {
+          const float u = k == 0 ? 0.f : (k == 1 ? 1.f : rng.uniform());
+          const float v = g.trilinear(r.at(segs[s].t_min + u * (segs[s].t_max - segs[s].t_min)));
+          ASSERT_LE(v, segs[s].c_max[0]) << "cell size " << voxels_per_cell;
+          nonzero += v > 0.f;
+        }
+      }
+    }
+  }
+  EXPECT_GT(nonzero, 300);  // the rays do meet the blobs
+}
+
 TEST(MajorantGrid, EmptyRunsComeOutAsOneSegment) {
   DenseGrid d({128, 16, 16});
   for (int x : {20, 100}) d.at(x, 8, 8) = 1.f;  // two isolated voxels along one line
