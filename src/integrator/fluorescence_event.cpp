@@ -45,17 +45,28 @@ float distance_to_scene_exit(const Scene& scene, const Ray& ray) {
   return intersect_bounds(scene.geometry.bounds(), ray, kInfinity, &t0, &t1) ? t1 : 0.f;
 }
 
+// Density of λ' for a light's excitation sampler; a light that cannot excite
+// the pigment (kept only when skips are off, to measure them) draws λ' uniformly.
+float excitation_pdf(const ExcitationSampler& es, float lambda) {
+  return es.can_excite() ? es.pdf(lambda) : 1.f / (kLambdaMax - kLambdaMinUV);
+}
+float sample_excitation(const ExcitationSampler& es, float u, float* pdf) {
+  if (es.can_excite()) return es.sample(u, pdf);
+  *pdf = 1.f / (kLambdaMax - kLambdaMinUV);
+  return kLambdaMinUV + u * (kLambdaMax - kLambdaMinUV);
+}
+
 // Fluence-weighted absorption  λ'·μ_a(x,λ')·Φ̂(x,λ')  from light sources only:
 // one light, one point on it, λ' ∝ S·ε·λ', the excitation ray at λ'.
-float direct_excitation(const Scene& scene, const FluorescentPigment& fp, const Vec3& x, int medium, float c,
-                        Rng& rng, PathStats& stats, float* lambda_excitation) {
+float direct_excitation(const Scene& scene, const FluorescentPigment& fp, const Vec3& x, int medium, float c, Rng& rng,
+                        PathStats& stats, float* lambda_excitation) {
   if (fp.lights.empty()) return 0.f;
   const auto pick = fp.light_sampler.sample(rng.uniform());
   if (!pick) return 0.f;
   const int slot = fp.slot_of_light(pick->index);
   const ExcitationSampler& es = fp.excitation[slot];
   float pdf_lambda;
-  const float lp = es.sample(rng.uniform(), &pdf_lambda);
+  const float lp = sample_excitation(es, rng.uniform(), &pdf_lambda);
   *lambda_excitation = lp;
   SampledWavelengths wl = SampledWavelengths::single(lp);
   const auto ls = sample_Li(scene.lights[pick->index], LightSampleContext{x, Vec3{}},
@@ -65,8 +76,9 @@ float direct_excitation(const Scene& scene, const FluorescentPigment& fp, const 
   PreparedMedia media(scene, wl);
   // Thin glass walls barely deviate a ray: cross them straight with Fresnel
   // transmission so delta lights can excite liquid inside a vessel (docs/fluorescence.md).
-  const SampledSpectrum T = trace_transmittance(scene, ShadowOrigin{x, medium, nullptr}, ls->wi, ls->p_light,
-                                                ls->is_infinite, media, rng, DielectricCrossing::straight_through_fresnel);
+  const SampledSpectrum T =
+      trace_transmittance(scene, ShadowOrigin{x, medium, nullptr}, ls->wi, ls->p_light, ls->is_infinite, media, rng,
+                          DielectricCrossing::straight_through_fresnel);
   if (T[0] == 0.f) return 0.f;
   const float fluence = ls->L[0] * T[0] / (ls->pdf * pick->pmf * pdf_lambda);
   return lp * kAbsorptionPerMolarExtinction * fp.epsilon(lp) * c * fluence;
@@ -82,13 +94,13 @@ float indirect_excitation(const Scene& scene, const FluorescentPigment& fp, cons
   if (rng.uniform() < light_share) {
     float pdf_unused;
     const auto pick = fp.light_sampler.sample(rng.uniform());
-    lp = fp.excitation[fp.slot_of_light(pick->index)].sample(rng.uniform(), &pdf_unused);
+    lp = sample_excitation(fp.excitation[fp.slot_of_light(pick->index)], rng.uniform(), &pdf_unused);
   } else {
     lp = kLambdaMinUV + rng.uniform() * range;
   }
   float pdf_lambda = (1.f - light_share) / range;
   for (size_t l = 0; l < fp.lights.size(); ++l)
-    pdf_lambda += light_share * fp.light_sampler.pmf(fp.lights[l]) * fp.excitation[l].pdf(lp);
+    pdf_lambda += light_share * fp.light_sampler.pmf(fp.lights[l]) * excitation_pdf(fp.excitation[l], lp);
   *lambda_excitation = lp;
   const float eps = fp.epsilon(lp);
   if (eps == 0.f) return 0.f;
@@ -119,7 +131,7 @@ SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, 
 
   // Skip when no carried wavelength lies in the emission band.
   const SampledSpectrum f = fp.emission.sample(lambda);
-  if (f.is_black()) return {};
+  if (f.is_black() && scene.settings.skip_unneeded_work) return {};
 
   if (!std::isfinite(t_end) || t_end >= kInfinity) t_end = distance_to_scene_exit(scene, ray);
   if (!(t_end > 0.f)) return {};
@@ -139,8 +151,7 @@ SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, 
   if (!(c > 0.f)) return {};
   ++stats.fluorescence_events;
 
-  const SampledSpectrum T =
-      transmittance(ray, ds.t, lambda, m, media[medium], estimator_for(scene, medium), rng);
+  const SampledSpectrum T = transmittance(ray, ds.t, lambda, m, media[medium], estimator_for(scene, medium), rng);
   if (T.is_black()) return {};
 
   SampledSpectrum j;  // emission per unit absorbed "λ'·μ_a·Φ", filled per lane below
@@ -161,8 +172,7 @@ SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, 
   return T * j / (ds.pdf * p_pigment);
 }
 
-SampledSpectrum reference_fluorescence_event(const Scene& scene, const Vec3& p, int medium,
-                                             const SampledSpectrum& beta,
+SampledSpectrum reference_fluorescence_event(const Scene& scene, const Vec3& p, int medium, const SampledSpectrum& beta,
                                              const SampledWavelengths& lambda, Rng& rng, PathStats& stats) {
   const auto& pigments = scene.fluorescence[medium];
   if (pigments.empty() || scene.light_sampler.empty()) return {};
@@ -179,15 +189,15 @@ SampledSpectrum reference_fluorescence_event(const Scene& scene, const Vec3& p, 
   if (!(hi > lo)) return {};
   const float le = lo + rng.uniform() * (hi - lo);  // uniform excitation wavelength
   SampledWavelengths wl = SampledWavelengths::single(le);
-  const auto ls = sample_Li(light, LightSampleContext{p, Vec3{}}, Point2{rng.uniform(), rng.uniform()}, wl,
-                            scene.geometry);
+  const auto ls =
+      sample_Li(light, LightSampleContext{p, Vec3{}}, Point2{rng.uniform(), rng.uniform()}, wl, scene.geometry);
   if (!ls || ls->L.is_black() || !(ls->pdf > 0.f)) return {};
   ++stats.excitation_rays;
   // One free-path test toward the light: a 0/1 transmittance estimate.
   PreparedMedia media(scene, wl);
-  const SampledSpectrum T = trace_transmittance(scene, ShadowOrigin{p, medium, nullptr}, ls->wi, ls->p_light,
-                                                ls->is_infinite, media, rng, DielectricCrossing::block,
-                                                TransmittanceEstimator::delta);
+  const SampledSpectrum T =
+      trace_transmittance(scene, ShadowOrigin{p, medium, nullptr}, ls->wi, ls->p_light, ls->is_infinite, media, rng,
+                          DielectricCrossing::block, TransmittanceEstimator::delta);
   if (T[0] == 0.f) return {};
   const SampledSpectrum f = fp.emission.sample(lambda);
   return beta * f * (ls->L[0] * T[0] / (ls->pdf * pick->pmf));

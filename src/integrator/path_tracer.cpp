@@ -28,8 +28,8 @@ SampledSpectrum sample_direct_light(const Scene& scene, const ScatterVertex& v, 
   if (!pick || pick->pmf == 0.f) return {};
   const Light& light = scene.lights[pick->index];
   const SampledWavelengths& lambda = media.lambda();
-  const auto ls = sample_Li(light, LightSampleContext{v.origin.p, v.n}, Point2{rng.uniform(), rng.uniform()},
-                            lambda, scene.geometry);
+  const auto ls = sample_Li(light, LightSampleContext{v.origin.p, v.n}, Point2{rng.uniform(), rng.uniform()}, lambda,
+                            scene.geometry);
   if (!ls || ls->L.is_black() || !(ls->pdf > 0.f)) return {};
   const auto [f, scatter_pdf] = scatter(ls->wi);
   if (f.is_black()) return {};
@@ -75,9 +75,9 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
       L.other += beta * Le / r_u.average(n);
       return;
     }
-    const float light_pdf = scene.light_sampler.pmf(light_index) *
-                            pdf_Li(scene.lights[light_index], LightSampleContext{prev.origin.p, prev.n}, ray.d,
-                                   scene.geometry, hit_on_light);
+    const float light_pdf = scene.light_sampler.pmf(light_index) * pdf_Li(scene.lights[light_index],
+                                                                          LightSampleContext{prev.origin.p, prev.n},
+                                                                          ray.d, scene.geometry, hit_on_light);
     const SampledSpectrum r_e = r_l * light_pdf;
     L.other += beta * Le / (r_u + r_e).average(n);
   };
@@ -97,67 +97,77 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
                                                                medium, media, rng, stats, options.fluorescence_depth);
       }
 
-      // Delta tracking with the hero wavelength; other lanes are weighted (spectral MIS).
-      bool scattered = false, terminated = false;
-      const SampledSpectrum T_maj = sample_T_maj(
-          ray, t_end, rng.uniform(), rng, lambda, scene.media[medium], media[medium],
-          [&](const Vec3& p, const MediumProperties& mp, const SampledSpectrum& sigma_maj,
-              const SampledSpectrum& T_m) {
-            const float p_absorb = mp.sigma_a[0] / sigma_maj[0];
-            const float p_scatter = mp.sigma_s[0] / sigma_maj[0];
-            const float u = rng.uniform();
-            if (u < p_absorb) {
-              if (scene.settings.fluorescence == FluorescenceMode::reference)
-                L.fluorescence += reference_fluorescence_event(scene, p, medium, beta / r_u.average(n), lambda,
-                                                               rng, stats);
-              terminated = true;
-              return false;
-            }
-            if (u < p_absorb + p_scatter) {
-              if (depth++ >= scene.settings.max_depth) {
+      if (scene.track_by_transmittance(medium)) {
+        // Nothing here scatters: no collision to sample, the transmittance is a
+        // weight (closed form if homogeneous), and no hero-wavelength absorption
+        // decision kills the other lanes. Light sampling does the same, so the
+        // MIS weights stay consistent.
+        beta *=
+            transmittance(ray, t_end, lambda, scene.media[medium], media[medium], estimator_for(scene, medium), rng);
+        if (beta.is_black()) break;
+      } else {
+        // Delta tracking with the hero wavelength; other lanes are weighted (spectral MIS).
+        bool scattered = false, terminated = false;
+        const SampledSpectrum T_maj = sample_T_maj(
+            ray, t_end, rng.uniform(), rng, lambda, scene.media[medium], media[medium],
+            [&](const Vec3& p, const MediumProperties& mp, const SampledSpectrum& sigma_maj,
+                const SampledSpectrum& T_m) {
+              const float p_absorb = mp.sigma_a[0] / sigma_maj[0];
+              const float p_scatter = mp.sigma_s[0] / sigma_maj[0];
+              const float u = rng.uniform();
+              if (u < p_absorb) {
+                if (scene.settings.fluorescence == FluorescenceMode::reference)
+                  L.fluorescence +=
+                      reference_fluorescence_event(scene, p, medium, beta / r_u.average(n), lambda, rng, stats);
                 terminated = true;
                 return false;
               }
-              const float pdf = T_m[0] * mp.sigma_s[0];
-              beta *= T_m * mp.sigma_s / pdf;
-              r_u *= T_m * mp.sigma_s / pdf;
-              if (beta.is_black() || r_u.is_black()) {
-                terminated = true;
+              if (u < p_absorb + p_scatter) {
+                if (depth++ >= scene.settings.max_depth) {
+                  terminated = true;
+                  return false;
+                }
+                const float pdf = T_m[0] * mp.sigma_s[0];
+                beta *= T_m * mp.sigma_s / pdf;
+                r_u *= T_m * mp.sigma_s / pdf;
+                if (beta.is_black() || r_u.is_black()) {
+                  terminated = true;
+                  return false;
+                }
+                const Vec3 wo = -ray.d;
+                const ScatterVertex v{{p, medium, nullptr}, Vec3{}};
+                L.other += beta * sample_direct_light(scene, v, r_u, media, rng, [&](const Vec3& wi) {
+                             return std::pair{phase_eval(mp.phase, wo, wi), phase_pdf(mp.phase, wo, wi)};
+                           });
+                const MediumPhaseSample ps = phase_sample(mp.phase, wo, Point2{rng.uniform(), rng.uniform()});
+                if (!(ps.pdf > 0.f)) {
+                  terminated = true;
+                  return false;
+                }
+                beta *= ps.p / ps.pdf;
+                r_l = r_u / ps.pdf;
+                prev = v;
+                specular_bounce = false;
+                count_emitters = true;
+                scattered = true;
+                ray = Ray{p, ps.wi};
+                segment_start = p;
                 return false;
               }
-              const Vec3 wo = -ray.d;
-              const ScatterVertex v{{p, medium, nullptr}, Vec3{}};
-              L.other += beta * sample_direct_light(scene, v, r_u, media, rng, [&](const Vec3& wi) {
-                           return std::pair{phase_eval(mp.phase, wo, wi), phase_pdf(mp.phase, wo, wi)};
-                         });
-              const MediumPhaseSample ps = phase_sample(mp.phase, wo, Point2{rng.uniform(), rng.uniform()});
-              if (!(ps.pdf > 0.f)) {
-                terminated = true;
-                return false;
-              }
-              beta *= ps.p / ps.pdf;
-              r_l = r_u / ps.pdf;
-              prev = v;
-              specular_bounce = false;
-              count_emitters = true;
-              scattered = true;
-              ray = Ray{p, ps.wi};
-              segment_start = p;
-              return false;
-            }
-            // Null collision: continue, weighting every lane by sigma_n / its pdf.
-            const SampledSpectrum sigma_n = clamp_zero(sigma_maj - mp.sigma_a - mp.sigma_s);
-            const float pdf = T_m[0] * sigma_n[0];
-            beta *= pdf > 0.f ? T_m * sigma_n / pdf : SampledSpectrum(0.f);
-            r_u *= pdf > 0.f ? T_m * sigma_n / pdf : SampledSpectrum(0.f);
-            r_l *= T_m * sigma_maj / (T_m[0] * sigma_maj[0]);
-            return !beta.is_black() && !r_u.is_black();
-          });
-      if (terminated || beta.is_black() || r_u.is_black()) break;
-      if (scattered) continue;
-      beta *= T_maj / T_maj[0];
-      r_u *= T_maj / T_maj[0];
-      r_l *= T_maj / T_maj[0];
+              // Null collision: continue, weighting every lane by sigma_n / its pdf.
+              const SampledSpectrum sigma_n = clamp_zero(sigma_maj - mp.sigma_a - mp.sigma_s);
+              const float pdf = T_m[0] * sigma_n[0];
+              beta *= pdf > 0.f ? T_m * sigma_n / pdf : SampledSpectrum(0.f);
+              r_u *= pdf > 0.f ? T_m * sigma_n / pdf : SampledSpectrum(0.f);
+              r_l *= T_m * sigma_maj / (T_m[0] * sigma_maj[0]);
+              return !beta.is_black() && !r_u.is_black();
+            });
+        if (terminated || beta.is_black() || r_u.is_black()) break;
+        if (scattered) continue;
+        beta *= T_maj / T_maj[0];
+        r_u *= T_maj / T_maj[0];
+        r_l *= T_maj / T_maj[0];
+      }
     }
 
     if (!hit) {

@@ -1,16 +1,16 @@
 #include "integrator/transport.h"
 
-#include "tracking/sample_t_maj.h"
-
 #include <cmath>
+
+#include "tracking/sample_t_maj.h"
 
 namespace chlorovdb {
 
 namespace {
 
 // The first shadow-ray segment: offset off the origin surface if there is one.
-Ray first_segment(const Scene& scene, const ShadowOrigin& from, const Vec3& wi, const Vec3& p_light,
-                  bool to_infinity, float* t_max) {
+Ray first_segment(const Scene& scene, const ShadowOrigin& from, const Vec3& wi, const Vec3& p_light, bool to_infinity,
+                  float* t_max) {
   if (to_infinity) {
     *t_max = kInfinity;
     return from.hit ? scene.geometry.spawn_ray(*from.hit, wi) : Ray{from.p, wi};
@@ -60,14 +60,21 @@ ShadowMis trace_shadow_mis(const Scene& scene, const ShadowOrigin& from, const V
       s.blocked = true;
       return s;
     }
-    if (medium >= 0) {
+    if (medium >= 0 && scene.track_by_transmittance(medium)) {
+      // As the camera path does in absorbing-only media: a plain weight.
+      s.T_ray *= transmittance(ray, hit ? hit->t : t_max, lambda, scene.media[medium], media[medium],
+                               estimator_for(scene, medium), rng);
+      if (s.T_ray.is_black()) {
+        s.blocked = true;
+        return s;
+      }
+    } else if (medium >= 0) {
       const float t_end = hit ? hit->t : t_max;
       // Ratio tracking inside the null-scattering framework: every tentative
       // collision multiplies by sigma_n/sigma_maj (pbrt-v4 SampleLd).
       const SampledSpectrum T_maj = sample_T_maj(
           ray, t_end, rng.uniform(), rng, lambda, scene.media[medium], media[medium],
-          [&](const Vec3&, const MediumProperties& mp, const SampledSpectrum& sigma_maj,
-              const SampledSpectrum& T_m) {
+          [&](const Vec3&, const MediumProperties& mp, const SampledSpectrum& sigma_maj, const SampledSpectrum& T_m) {
             const SampledSpectrum sigma_n = clamp_zero(sigma_maj - mp.sigma_a - mp.sigma_s);
             const float pdf = T_m[0] * sigma_maj[0];
             s.T_ray *= T_m * sigma_n / pdf;
@@ -76,8 +83,10 @@ ShadowMis trace_shadow_mis(const Scene& scene, const ShadowOrigin& from, const V
             // Russian roulette on low transmittance keeps thick media cheap.
             const SampledSpectrum Tr = safe_div(s.T_ray, SampledSpectrum(0.5f) * (s.r_l + s.r_u));
             if (Tr.max_value() < 0.05f) {
-              if (rng.uniform() < 0.75f) s.T_ray = SampledSpectrum(0.f);
-              else s.T_ray /= 0.25f;
+              if (rng.uniform() < 0.75f)
+                s.T_ray = SampledSpectrum(0.f);
+              else
+                s.T_ray /= 0.25f;
             }
             return !s.T_ray.is_black();
           });
@@ -97,9 +106,9 @@ ShadowMis trace_shadow_mis(const Scene& scene, const ShadowOrigin& from, const V
   return s;
 }
 
-SampledSpectrum trace_transmittance(const Scene& scene, const ShadowOrigin& from, const Vec3& wi,
-                                    const Vec3& p_light, bool to_infinity, PreparedMedia& media, Rng& rng,
-                                    DielectricCrossing dielectrics, std::optional<TransmittanceEstimator> forced) {
+SampledSpectrum trace_transmittance(const Scene& scene, const ShadowOrigin& from, const Vec3& wi, const Vec3& p_light,
+                                    bool to_infinity, PreparedMedia& media, Rng& rng, DielectricCrossing dielectrics,
+                                    std::optional<TransmittanceEstimator> forced) {
   SampledSpectrum T(1.f);
   float t_max;
   Ray ray = first_segment(scene, from, wi, p_light, to_infinity, &t_max);

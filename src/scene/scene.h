@@ -35,6 +35,10 @@ struct RenderSettings {
   bool fluorescence_auto = true;  // `auto` in the scene: direct where exact, full otherwise
   std::string fluorescence_reason;  // why auto chose what it chose (reported to the user)
   int spectral_bins = 0;
+  // Skip work a scene does not need (absorbing-only media tracked by
+  // transmittance, non-fluorescent pigments, lights dark in an excitation band,
+  // paths carrying no emission wavelength). Off only to measure each skip.
+  bool skip_unneeded_work = true;
 };
 
 // What a surface is made of and what lies on each side of it.
@@ -56,6 +60,13 @@ struct FluorescentPigment {
   std::vector<int> lights;                     // lights that can excite it
   std::vector<ExcitationSampler> excitation;   // parallel to `lights`
   LightSampler light_sampler;                  // over `lights`, weighted by excitation power
+  // Some listed light shines in the absorption band (a light kept only to
+  // measure the cost of not skipping dark lights does not count).
+  bool excitation_possible() const {
+    for (const ExcitationSampler& es : excitation)
+      if (es.can_excite()) return true;
+    return false;
+  }
   int slot_of_light(int light_index) const {   // position of a light in `lights`
     for (size_t s = 0; s < lights.size(); ++s)
       if (lights[s] == light_index) return int(s);
@@ -76,8 +87,12 @@ struct Scene {
   std::vector<int> infinite_lights;  // environment lights, seen by rays that escape
   std::vector<Medium> media;
   std::vector<std::string> medium_names;
+  std::vector<bool> medium_scatters;  // anything in it scatters (molecules or particles)
   std::vector<std::vector<FluorescentPigment>> fluorescence;  // per medium
   int camera_medium = -1;
+
+  // Absorbing-only media need no collision sampling: transmittance is a weight.
+  bool track_by_transmittance(int medium) const { return settings.skip_unneeded_work && !medium_scatters[medium]; }
 
   bool has_fluorescence() const {
     for (const auto& f : fluorescence)

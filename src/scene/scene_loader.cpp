@@ -75,6 +75,7 @@ RenderSettings read_render_settings(ParamReader& top, const SceneOverrides& o, s
     *transmittance = r->get_enum("transmittance", "auto", kEstimators);
     *fluorescence = r->get_enum("fluorescence", "auto", kFluorescenceModes);
     s.spectral_bins = r->get_int("spectral_bins", 0, 0, 4096);
+    s.skip_unneeded_work = r->get_bool("skip_unneeded_work", true);
     r->finish();
   } else {
     *transmittance = "auto";
@@ -224,6 +225,17 @@ Light read_light(ParamReader& l, float unit) {
   return light;
 }
 
+// Does any fluorescent pigment of the scene emit where `absorber` absorbs?
+bool absorbs_fluorescence(const Scene& scene, const FluorescentPigment& absorber) {
+  for (const auto& medium : scene.fluorescence)
+    for (const FluorescentPigment& emitter : medium) {
+      double overlap = 0;
+      for (float l = kLambdaMinUV; l < kLambdaMax; l += 1.f) overlap += emitter.emission(l) * absorber.epsilon(l);
+      if (overlap > 0) return true;
+    }
+  return false;
+}
+
 // Does any medium scatter, any surface reflect, or any fluorescent pigment
 // absorb what a fluorescent pigment emits? If none, direct excitation is exact.
 std::string why_direct_is_not_exact(const Scene& scene) {
@@ -235,14 +247,8 @@ std::string why_direct_is_not_exact(const Scene& scene) {
       return "surfaces reflect or refract excitation light";
   }
   for (const auto& medium : scene.fluorescence)
-    for (const FluorescentPigment& emitter : medium)
-      for (const auto& other : scene.fluorescence)
-        for (const FluorescentPigment& absorber : other) {
-          // Reabsorption: ∫ f_emitter(λ) ε_absorber(λ) dλ > 0.
-          double overlap = 0;
-          for (float l = kLambdaMinUV; l < kLambdaMax; l += 1.f) overlap += emitter.emission(l) * absorber.epsilon(l);
-          if (overlap > 0) return "fluorescent pigments reabsorb emitted light";
-        }
+    for (const FluorescentPigment& absorber : medium)
+      if (absorbs_fluorescence(scene, absorber)) return "fluorescent pigments reabsorb emitted light";
   return {};
 }
 
@@ -250,12 +256,14 @@ void setup_fluorescence(Scene& scene, const std::string& mode) {
   for (size_t m = 0; m < scene.media.size(); ++m) {
     for (FluorescentPigment& fp : scene.fluorescence[m]) {
       std::vector<float> weights;
+      const bool skip = scene.settings.skip_unneeded_work;
       for (size_t l = 0; l < scene.lights.size(); ++l) {
         const Light& light = scene.lights[l];
         ExcitationSampler es(emission_spectrum(light), fp.epsilon);
-        if (!es.can_excite() || light_scale(light) == 0.f) continue;  // dark in the excitation band
-        // Weight: the light's power times the share of its spectrum the pigment can absorb.
-        const float in_band = es.total() / std::max(1e-30f, emission_spectrum(light).integral(kLambdaMinUV, kLambdaMax));
+        // Weight: the light's power times the share of its spectrum the pigment
+        // can absorb, so lights dark in the excitation band are never picked.
+        const float total = emission_spectrum(light).integral(kLambdaMinUV, kLambdaMax);
+        const float in_band = skip ? es.total() / std::max(1e-30f, total) : 1.f;
         const float w = phi_power(light, scene.geometry) * in_band;
         if (!(w > 0.f)) continue;
         fp.lights.push_back(int(l));
@@ -283,12 +291,15 @@ void setup_fluorescence(Scene& scene, const std::string& mode) {
     s.fluorescence_reason = why.empty() ? "auto: exact here, nothing scatters, reflects or reabsorbs"
                                         : "auto: " + why;
   }
-  // Pigments no light can excite cost nothing: drop them unless another
-  // pigment's fluorescence might excite them (full mode follows that light).
-  for (auto& medium : scene.fluorescence)
-    std::erase_if(medium, [&](const FluorescentPigment& fp) {
-      return fp.lights.empty() && s.fluorescence != FluorescenceMode::full;
-    });
+  // Pigments nothing can excite cost nothing: no light shines in their
+  // absorption band and (in full mode) no fluorescent pigment emits into it.
+  if (s.skip_unneeded_work)
+    for (auto& medium : scene.fluorescence)
+      std::erase_if(medium, [&](const FluorescentPigment& fp) {
+        if (fp.quantum_yield == 0.f) return true;
+        if (!fp.excitation.empty() && fp.excitation_possible()) return false;
+        return s.fluorescence != FluorescenceMode::full || !absorbs_fluorescence(scene, fp);
+      });
 }
 
 }  // namespace
@@ -312,6 +323,7 @@ Scene load_scene(const std::filesystem::path& file, const SceneOverrides& overri
     media.add(name, int(scene.media.size()));
     scene.media.push_back(std::move(def.medium));
     scene.medium_names.push_back(name);
+    scene.medium_scatters.push_back(can_scatter(scene.media.back()));
     scene.fluorescence.push_back(std::move(def.fluorescent));
   }
 
