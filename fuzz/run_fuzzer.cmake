@@ -1,0 +1,17 @@
+# cmake -DFUZZER=... -DCORPUS=dir -DSEEDS="dir;dir" -DDICT=file -DSECONDS=n -DMAXLEN=bytes -DARTIFACTS=dir/ -P run_fuzzer.cmake
+# One bounded libFuzzer run: a fixed seed, SECONDS of wall time, 10 s per input
+# at most (a longer one is a hang and fails the run), crashes kept in ARTIFACTS.
+file(MAKE_DIRECTORY ${CORPUS} ${ARTIFACTS})
+set(seed_dirs)
+foreach(dir ${SEEDS})
+  if(IS_DIRECTORY ${dir})
+    list(APPEND seed_dirs ${dir})
+  endif()
+endforeach()
+execute_process(COMMAND ${FUZZER} -seed=1 -max_total_time=${SECONDS} -timeout=10 -rss_limit_mb=4096
+                        -max_len=${MAXLEN} -dict=${DICT} -artifact_prefix=${ARTIFACTS} -print_final_stats=1
+                        ${CORPUS} ${seed_dirs}
+                RESULT_VARIABLE result)
+if(NOT result EQUAL 0)
+  message(FATAL_ERROR "${FUZZER} found a problem (exit ${result}); reproducer in ${ARTIFACTS}")
+endif()
