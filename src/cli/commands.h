@@ -14,5 +14,8 @@ struct Command {
 
 Command add_render_command(CLI::App& app);
 Command add_info_command(CLI::App& app);
+Command add_converge_command(CLI::App& app);
+Command add_reference_command(CLI::App& app);
+Command add_export_pbrt_command(CLI::App& app);
 
 }  // namespace chlorovdb::cli

@@ -1,0 +1,198 @@
+// `chlorovdb converge`: one progressive render measured against a reference
+// image or an analytic case at increasing effort -> CSV + log-log SVG plot.
+// docs/convergence.md explains the metrics and the analytic cases.
+#include <csignal>
+#include <fstream>
+#include <unistd.h>
+
+#include <fmt/format.h>
+
+#include "analysis/analytic_slab.h"
+#include "analysis/loglog_fit.h"
+#include "analysis/progressive.h"
+#include "analysis/scene_variant.h"
+#include "analysis/svg_plot.h"
+#include "cli/commands.h"
+#include "core/error.h"
+#include "io/image.h"
+
+namespace chlorovdb::cli {
+
+namespace {
+
+std::atomic<bool> g_stop{false};
+
+extern "C" void on_converge_interrupt(int) {
+  if (g_stop.exchange(true)) _exit(130);
+}
+
+struct ConvergeArgs {
+  std::filesystem::path scene;
+  std::filesystem::path reference;
+  std::string analytic;
+  std::string spp = "1,2,4,8,16,32,64";
+  std::string time_budgets;
+  std::optional<int> threads, wavelengths;
+  std::optional<uint64_t> seed;
+  std::optional<std::string> resolution, fluorescence, transmittance;
+  std::vector<std::string> sets;
+  std::string label;
+  std::filesystem::path output;  // prefix: PREFIX.csv, PREFIX.svg
+  bool save_images = false;
+};
+
+template <class T>
+std::vector<T> parse_list(const std::string& text, const char* option) {
+  std::vector<T> values;
+  size_t start = 0;
+  while (start < text.size()) {
+    size_t end = text.find(',', start);
+    if (end == std::string::npos) end = text.size();
+    const std::string item = text.substr(start, end - start);
+    try {
+      size_t used = 0;
+      const double v = std::stod(item, &used);
+      if (used != item.size() || !(v > 0)) throw std::invalid_argument(item);
+      values.push_back(T(v));
+    } catch (const std::exception&) {
+      throw InputError("command line", option, text, "expected a comma-separated list of positive numbers");
+    }
+    start = end + 1;
+  }
+  return values;
+}
+
+int converge(const ConvergeArgs& a);
+
+}  // namespace
+
+Command add_converge_command(CLI::App& app) {
+  auto args = std::make_shared<ConvergeArgs>();
+  ConvergeArgs& r = *args;
+  CLI::App* sub = app.add_subcommand(
+      "converge", "Error against a reference (or an analytic case) at increasing samples / time -> CSV + SVG");
+  sub->add_option("scene", r.scene, "Scene file (not needed with --analytic)")->check(CLI::ExistingFile);
+  auto* ref = sub->add_option("--reference", r.reference, "Reference EXR (e.g. from `chlorovdb reference`)")
+                  ->check(CLI::ExistingFile);
+  auto* ana = sub->add_option("--analytic", r.analytic, "Analytic case instead of a reference: slab | slab_transmission | slab_linear");
+  ref->excludes(ana);
+  ana->excludes(ref);
+  sub->add_option("--spp", r.spp, "Comma-separated sample counts (default 1,2,4,8,16,32,64)");
+  sub->add_option("--time-budgets", r.time_budgets, "Comma-separated rendering times in seconds");
+  sub->add_option("--threads", r.threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 1024));
+  sub->add_option("--seed", r.seed, "Seed of the per-pixel random streams");
+  sub->add_option("--resolution", r.resolution, "Image size WxH (must match the reference)");
+  sub->add_option("--wavelengths", r.wavelengths, "Wavelengths per camera path")->check(CLI::Range(1, 16));
+  sub->add_option("--fluorescence", r.fluorescence, "auto | direct | full | reference | off");
+  sub->add_option("--transmittance", r.transmittance, "auto | ratio | residual_ratio | delta");
+  sub->add_option("--set", r.sets, "KEY=VALUE: change any scene key, e.g. render.skip_unneeded_work=false (repeatable)");
+  sub->add_option("--label", r.label, "Name of this variant in the CSV and plot (default: the output prefix's name)");
+  sub->add_flag("--save-images", r.save_images, "Also write PREFIX_sppN.exr at every point");
+  sub->add_option("-o,--output", r.output, "Output prefix: writes PREFIX.csv and PREFIX.svg")->required();
+  return {sub, [args] { return converge(*args); }};
+}
+
+namespace {
+
+int converge(const ConvergeArgs& a) {
+  if (a.reference.empty() && a.analytic.empty())
+    throw InputError("command line", "--reference", "", "give a reference image or --analytic NAME");
+  if (a.analytic.empty() && a.scene.empty()) throw InputError("command line", "scene", "", "a scene file is required");
+  SceneOverrides o;
+  o.seed = a.seed;
+  o.wavelengths = a.wavelengths;
+  o.fluorescence = a.fluorescence;
+  o.transmittance = a.transmittance;
+  if (a.resolution) parse_resolution(*a.resolution, o);
+  const std::filesystem::path prefix = a.output;
+  if (prefix.has_parent_path()) std::filesystem::create_directories(prefix.parent_path());
+  const std::string label = a.label.empty() ? prefix.filename().string() : a.label;
+
+  std::optional<SlabCase> slab;
+  std::filesystem::path scene_file = a.scene;
+  if (!a.analytic.empty()) {
+    slab = analytic_case(a.analytic);
+    if (!a.scene.empty()) fmt::print(stderr, "note: --analytic {} defines its own scene; {} is ignored\n", a.analytic, a.scene.string());
+    scene_file = write_slab_scene(*slab, std::filesystem::path(prefix.string() + "_scene"));
+  }
+  const Scene scene = load_scene_variant(scene_file, o, a.sets);
+  const Image reference = slab ? slab_reference_image(*slab, scene) : read_exr(a.reference);
+  if (reference.width != scene.settings.width || reference.height != scene.settings.height)
+    throw InputError(a.reference.string(), "", fmt::format("{}x{}", reference.width, reference.height),
+                     fmt::format("the reference's size differs from the render's {}x{} (use --resolution)",
+                                 scene.settings.width, scene.settings.height));
+
+  ConvergenceOptions co;
+  co.spp = parse_list<int>(a.spp, "--spp");
+  if (!a.time_budgets.empty()) co.time_budgets = parse_list<double>(a.time_budgets, "--time-budgets");
+  co.threads = a.threads.value_or(0);
+  co.seed = scene.settings.seed;
+  co.stop = &g_stop;
+  co.keep_images = a.save_images;
+  co.on_point = [&](const ConvergencePoint& p) {
+    const LayerError* t = find_error(p.errors, "total");
+    fmt::print(stderr, "{:>6} spp  {:8.3f} s  RMSE(total) {:.4e}  relMSE {:.4e}\n", p.spp, p.seconds,
+               t ? t->rmse : 0.0, t ? t->rel_mse : 0.0);
+  };
+  g_stop = false;
+  std::signal(SIGINT, on_converge_interrupt);
+  std::signal(SIGTERM, on_converge_interrupt);
+  const std::vector<ConvergencePoint> points = run_convergence(scene, reference, co);
+  std::signal(SIGINT, SIG_DFL);
+  std::signal(SIGTERM, SIG_DFL);
+
+  // CSV: one row per point and layer.
+  const std::filesystem::path csv = prefix.string() + ".csv";
+  {
+    std::ofstream f(csv);
+    f << "label,spp,seconds,time_budget,layer,mse,rmse,rel_mse,bias,reference_mean,efficiency\n";
+    for (const ConvergencePoint& p : points)
+      for (const LayerError& e : p.errors)
+        f << fmt::format("{},{},{:.6f},{:g},{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e}\n", label, p.spp, p.seconds,
+                         p.time_budget, e.layer, e.mse, e.rmse, e.rel_mse, e.bias, e.reference_mean,
+                         e.mse > 0 && p.seconds > 0 ? 1.0 / (e.mse * p.seconds) : 0.0);
+    if (!f) throw InputError(csv.string(), "", "", "cannot be written");
+  }
+  if (a.save_images)
+    for (const ConvergencePoint& p : points) write_exr(prefix.string() + fmt::format("_spp{}.exr", p.spp), p.image);
+
+  // Plot: RMSE against time and samples, relMSE against samples; one series per layer.
+  std::vector<std::string> layers;
+  if (!points.empty())
+    for (const LayerError& e : points.front().errors) layers.push_back(e.layer);
+  LogLogPanel vs_time{"RMSE against time: " + label, "render time (s)", "RMSE", {}, -0.5};
+  LogLogPanel vs_spp{"RMSE against samples", "samples per pixel", "RMSE", {}, -0.5};
+  LogLogPanel rel{"relative MSE against samples", "samples per pixel", "relMSE", {}, -1.0, "slope -1"};
+  std::vector<const ConvergencePoint*> by_spp;
+  for (const ConvergencePoint& p : points) by_spp.push_back(&p);
+  std::stable_sort(by_spp.begin(), by_spp.end(), [](auto* x, auto* y) { return x->spp < y->spp; });
+  for (const std::string& layer : layers) {
+    PlotSeries t{layer, {}, {}}, s{layer, {}, {}}, r{layer, {}, {}};
+    std::vector<double> spp_x, rmse_y;
+    for (const ConvergencePoint* p : by_spp) {
+      const LayerError* e = find_error(p->errors, layer);
+      if (!e) continue;
+      t.x.push_back(p->seconds);
+      t.y.push_back(e->rmse);
+      s.x.push_back(p->spp);
+      s.y.push_back(e->rmse);
+      r.x.push_back(p->spp);
+      r.y.push_back(e->rel_mse);
+    }
+    const PowerFit fit = fit_power_law(s.x, s.y);
+    if (fit.points >= 2) {
+      fmt::print("{}: RMSE ~ spp^{:.3f} (fit over {} points, r² {:.3f})\n", layer, fit.exponent, fit.points, fit.r2);
+      s.label += fmt::format(" (slope {:.2f})", fit.exponent);
+    }
+    vs_time.series.push_back(std::move(t));
+    vs_spp.series.push_back(std::move(s));
+    rel.series.push_back(std::move(r));
+  }
+  const std::filesystem::path svg = prefix.string() + ".svg";
+  write_loglog_svg(svg, {vs_time, vs_spp, rel});
+  fmt::print(stderr, "wrote {} and {}\n", csv.string(), svg.string());
+  return g_stop ? 130 : 0;
+}
+
+}  // namespace
+}  // namespace chlorovdb::cli
