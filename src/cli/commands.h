@@ -14,6 +14,7 @@ struct Command {
 
 Command add_render_command(CLI::App& app);
 Command add_info_command(CLI::App& app);
+Command add_voxelize_command(CLI::App& app);
 Command add_converge_command(CLI::App& app);
 Command add_reference_command(CLI::App& app);
 Command add_export_pbrt_command(CLI::App& app);

@@ -15,6 +15,7 @@ int main(int argc, char** argv) {
   const std::vector<cli::Command> commands = {
       cli::add_render_command(app),
       cli::add_info_command(app),
+      cli::add_voxelize_command(app),
       cli::add_converge_command(app),
       cli::add_reference_command(app),
       cli::add_export_pbrt_command(app),

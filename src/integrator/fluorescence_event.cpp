@@ -76,9 +76,10 @@ float direct_excitation(const Scene& scene, const FluorescentPigment& fp, const 
   PreparedMedia media(scene, wl);
   // Thin glass walls barely deviate a ray: cross them straight with Fresnel
   // transmission so delta lights can excite liquid inside a vessel (docs/fluorescence.md).
+  const DielectricCrossing glass = scene.settings.excitation_through_glass ? DielectricCrossing::straight_through_fresnel
+                                                                           : DielectricCrossing::block;
   const SampledSpectrum T =
-      trace_transmittance(scene, ShadowOrigin{x, medium, nullptr}, ls->wi, ls->p_light, ls->is_infinite, media, rng,
-                          DielectricCrossing::straight_through_fresnel);
+      trace_transmittance(scene, ShadowOrigin{x, medium, nullptr}, ls->wi, ls->p_light, ls->is_infinite, media, rng, glass);
   if (T[0] == 0.f) return 0.f;
   const float fluence = ls->L[0] * T[0] / (ls->pdf * pick->pmf * pdf_lambda);
   return lp * kAbsorptionPerMolarExtinction * fp.epsilon(lp) * c * fluence;

@@ -39,6 +39,11 @@ struct RenderSettings {
   // transmittance, non-fluorescent pigments, lights dark in an excitation band,
   // paths carrying no emission wavelength). Off only to measure each skip.
   bool skip_unneeded_work = true;
+  // Excitation rays meeting smooth glass: cross it straight with Fresnel
+  // transmission (thin-wall approximation, lets delta lights excite liquid in a
+  // vessel), or stop (exact; light through glass then arrives only by `full`
+  // mode's continuation paths, which cannot reach delta lights). docs/fluorescence.md.
+  bool excitation_through_glass = true;
 };
 
 // What a surface is made of and what lies on each side of it.
