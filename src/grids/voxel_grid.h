@@ -138,9 +138,10 @@ inline float VoxelGrid::trilinear(const Vec3& p_index) const {
   // out-of-range float to int is undefined. Outside, all eight corners are background.
   if (!(qx >= 0.f && qy >= 0.f && qz >= 0.f && qx < extent_f_.x && qy < extent_f_.y && qz < extent_f_.z))
     return background_;
-  const float fx = std::floor(qx), fy = std::floor(qy), fz = std::floor(qz);
-  const float wx = qx - fx, wy = qy - fy, wz = qz - fz;
-  const float* v = brick_values(int(fx), int(fy), int(fz));
+  // q >= 0 here, so truncation is floor (and much cheaper than std::floor without SSE4.1).
+  const int ix = int(qx), iy = int(qy), iz = int(qz);
+  const float wx = qx - float(ix), wy = qy - float(iy), wz = qz - float(iz);
+  const float* v = brick_values(ix, iy, iz);
   constexpr int Y = kBrickStride, Z = kBrickStride * kBrickStride;
   const float c00 = v[0] + wx * (v[1] - v[0]);
   const float c10 = v[Y] + wx * (v[Y + 1] - v[Y]);

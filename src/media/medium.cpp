@@ -113,19 +113,28 @@ MediumProperties Medium::properties(const Vec3& p_index, const PreparedMedium& p
   float v[kMaxMajorantChannels] = {};
   lookup_channels(p_index, v);
   MediumProperties mp;
-  mp.sigma_a = prepared.sigma_a_constant;
-  for (int k = 0; k < pigment_count(); ++k) {
+  mp.phase.particle = desc_.particle_phase;
+  const int pigments = pigment_count();
+  for (int k = 0; k < pigments; ++k) {
     const int c = pigment_channel_[k];
-    const float concentration = c < 0 ? pigment_constant_[k] : v[c] * pigment_scale_[k];
-    mp.concentration[k] = concentration;
-    mp.sigma_a_pigment[k] = prepared.sigma_a_per_molar[k] * concentration;
-    if (c >= 0) mp.sigma_a += mp.sigma_a_pigment[k];  // constant pigments are in sigma_a_constant already
+    mp.concentration[k] = c < 0 ? pigment_constant_[k] : v[c] * pigment_scale_[k];
   }
-  const SampledSpectrum sigma_s_particle = particle_channel_ < 0
-                                               ? prepared.sigma_s_particle_constant
-                                               : prepared.sigma_s_particle_per_value * v[particle_channel_];
-  mp.sigma_s = prepared.sigma_s_molecular + sigma_s_particle;
-  mp.phase = {desc_.particle_phase, safe_div(sigma_s_particle, mp.sigma_s)};
+  const float particle_value = particle_channel_ < 0 ? 0.f : v[particle_channel_];
+  // Lane by lane over the carried wavelengths only: this runs at every collision.
+  for (int i = 0; i < prepared.lambda_count; ++i) {
+    float sigma_a = prepared.sigma_a_constant[i];  // holds the constant pigments already
+    for (int k = 0; k < pigments; ++k) {
+      const float sigma_a_k = prepared.sigma_a_per_molar[k][i] * mp.concentration[k];
+      mp.sigma_a_pigment[k][i] = sigma_a_k;
+      if (pigment_channel_[k] >= 0) sigma_a += sigma_a_k;
+    }
+    const float sigma_s_particle =
+        prepared.sigma_s_particle_constant[i] + prepared.sigma_s_particle_per_value[i] * particle_value;
+    const float sigma_s = prepared.sigma_s_molecular[i] + sigma_s_particle;
+    mp.sigma_a[i] = sigma_a;
+    mp.sigma_s[i] = sigma_s;
+    mp.phase.particle_fraction[i] = sigma_s > 0.f ? sigma_s_particle / sigma_s : 0.f;
+  }
   return mp;
 }
 

@@ -84,15 +84,20 @@ struct PreparedMedium {
 
   // Per-wavelength bounds of sigma_t over a majorant segment (PHYSICS §6):
   // sigma_maj = zeta + 100 ln10 sum_k eps_k c_max,k + sigma_s,max; sigma_min likewise with c_min.
-  SampledSpectrum sigma_maj(const MajorantSegment& s, int channels) const {
-    SampledSpectrum r = sigma_t_constant;
-    for (int c = 0; c < channels; ++c) r += channel_sigma_t[c] * s.c_max[c];
-    return r;
-  }
-  SampledSpectrum sigma_min(const MajorantSegment& s, int channels) const {
-    SampledSpectrum r = sigma_t_constant;
-    for (int c = 0; c < channels; ++c) r += channel_sigma_t[c] * s.c_min[c];
-    return r;
+  SampledSpectrum sigma_maj(const MajorantSegment& s, int channels) const { return sigma_t_for(s.c_max, channels); }
+  SampledSpectrum sigma_min(const MajorantSegment& s, int channels) const { return sigma_t_for(s.c_min, channels); }
+
+  // sigma_t for the given channel values. Loops over the carried lanes only (the
+  // others are zero in every prepared spectrum): this runs at every collision.
+  template <typename Values>
+  SampledSpectrum sigma_t_for(const Values& values, int channels) const {
+    SampledSpectrum s;
+    for (int i = 0; i < lambda_count; ++i) {
+      float sigma = sigma_t_constant[i];
+      for (int c = 0; c < channels; ++c) sigma += channel_sigma_t[c][i] * values[c];
+      s[i] = sigma;
+    }
+    return s;
   }
 };
 
@@ -168,9 +173,7 @@ inline void Medium::lookup_channels(const Vec3& p_index, float* values) const {
 inline SampledSpectrum Medium::sigma_t(const Vec3& p_index, const PreparedMedium& prepared) const {
   float v[kMaxMajorantChannels] = {};
   lookup_channels(p_index, v);
-  SampledSpectrum s = prepared.sigma_t_constant;
-  for (size_t c = 0; c < channels_.size(); ++c) s += prepared.channel_sigma_t[c] * v[c];
-  return s;
+  return prepared.sigma_t_for(v, int(channels_.size()));
 }
 
 }  // namespace chlorovdb

@@ -25,7 +25,10 @@ bool walk_majorants(const Medium& medium, const Ray& ray_index, float t_max, flo
     if (rate > 0.f) {
       float t = seg->t_min;
       for (;;) {
-        t += sample_exponential(u, rate);
+        // sample_exponential, with logf instead of log1pf: 1 - u is exact for Rng's
+        // 24-bit u, so log1pf's accuracy near u = 0 buys nothing here, and logf is
+        // several times faster (a tenth of the time of a transmittance estimate).
+        t += -std::log(1.f - u) / rate;
         u = rng.uniform();
         if (!(t < seg->t_max)) break;
         if (!collide(t)) return false;
@@ -43,11 +46,11 @@ inline SampledSpectrum carried_lanes(int count) {
   return r;
 }
 
-// e^{-a} on the carried lanes, 0 on the others: exp is the costly part of a
-// collision, so lanes nobody reads are skipped.
-inline SampledSpectrum exp_neg_lanes(const SampledSpectrum& a, int count) {
+// e^{-sigma dt} on the carried lanes, 0 on the others: exp is the costly part
+// of a collision, so lanes nobody reads are skipped.
+inline SampledSpectrum exp_neg_lanes(const SampledSpectrum& sigma, float dt, int count) {
   SampledSpectrum r;
-  for (int i = 0; i < count; ++i) r[i] = std::exp(-a[i]);
+  for (int i = 0; i < count; ++i) r[i] = std::exp(-sigma[i] * dt);
   return r;
 }
 

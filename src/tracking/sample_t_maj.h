@@ -46,14 +46,14 @@ SampledSpectrum sample_T_maj(Ray ray, float t_max, float u, Rng& rng, const Samp
         return sigma_maj[0];
       },
       [&](float t) {
-        T_maj *= detail::exp_neg_lanes(sigma_maj * (t - t_last), n);
+        T_maj *= detail::exp_neg_lanes(sigma_maj, t - t_last, n);
         t_last = t;
         const MediumProperties mp = medium.properties(ray_index.at(t), prepared);
         if (!callback(ray.at(t), mp, sigma_maj, T_maj)) return false;
         T_maj = one;
         return true;
       },
-      [&](const MajorantSegment& s) { T_maj *= detail::exp_neg_lanes(sigma_maj * (s.t_max - t_last), n); });
+      [&](const MajorantSegment& s) { T_maj *= detail::exp_neg_lanes(sigma_maj, s.t_max - t_last, n); });
   return finished ? T_maj : one;
 }
 

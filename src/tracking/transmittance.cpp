@@ -14,12 +14,6 @@ float max_lane(const SampledSpectrum& s, int n) {
   return m;
 }
 
-bool all_zero(const SampledSpectrum& s, int n) {
-  for (int i = 0; i < n; ++i)
-    if (s[i] != 0.f) return false;
-  return true;
-}
-
 // What the estimators share: the ray in the medium's index space, in metres.
 struct Track {
   const Medium& medium;
@@ -37,48 +31,39 @@ void cut_unbounded(const SampledSpectrum& sigma, int n, SampledSpectrum* T) {
     if (sigma[i] > 0.f) (*T)[i] = 0.f;
 }
 
+// Ratio tracking, and with kResidual residual ratio tracking: ratio tracking
+// is the residual form with a control coefficient of zero (a template
+// argument, so plain ratio tracking pays nothing for the control).
+template <bool kResidual>
 SampledSpectrum ratio_tracking(const Track& k, Rng& rng) {
-  SampledSpectrum T = detail::carried_lanes(k.n), sigma_maj;
-  float rate = 0.f;
-  detail::walk_majorants(
-      k.medium, k.ray_index, k.t_end, rng.uniform(), rng,
-      [&](const MajorantSegment& s) {
-        sigma_maj = k.prepared.sigma_maj(s, k.channels);
-        if (k.unbounded && s.t_max >= k.t_end) {
-          cut_unbounded(sigma_maj, k.n, &T);
-          return 0.f;
-        }
-        return rate = max_lane(sigma_maj, k.n);
-      },
-      [&](float t) {
-        const SampledSpectrum sigma_t = k.medium.sigma_t(k.ray_index.at(t), k.prepared);
-        T *= clamp_zero(SampledSpectrum(1.f) - sigma_t / rate);  // rounding may push sigma_t a hair past rate
-        return !all_zero(T, k.n);
-      },
-      [](const MajorantSegment&) {});
-  return T;
-}
-
-SampledSpectrum residual_ratio_tracking(const Track& k, Rng& rng) {
   SampledSpectrum T = detail::carried_lanes(k.n), sigma_c;
-  float rate = 0.f;
+  float inv_rate = 0.f;
   detail::walk_majorants(
       k.medium, k.ray_index, k.t_end, rng.uniform(), rng,
       [&](const MajorantSegment& s) {
-        sigma_c = k.prepared.sigma_min(s, k.channels);
         const SampledSpectrum sigma_maj = k.prepared.sigma_maj(s, k.channels);
         if (k.unbounded && s.t_max >= k.t_end) {
           cut_unbounded(sigma_maj, k.n, &T);
           return 0.f;
         }
-        // The control part is integrated exactly; only the residual is tracked.
-        T *= detail::exp_neg_lanes(sigma_c * (s.t_max - s.t_min), k.n);
-        return rate = max_lane(sigma_maj - sigma_c, k.n);
+        if constexpr (kResidual) {
+          // The control part is integrated exactly; only the residual is tracked.
+          sigma_c = k.prepared.sigma_min(s, k.channels);
+          T *= detail::exp_neg_lanes(sigma_c, s.t_max - s.t_min, k.n);
+        }
+        const float rate = max_lane(kResidual ? sigma_maj - sigma_c : sigma_maj, k.n);
+        inv_rate = 1.f / rate;
+        return rate;
       },
       [&](float t) {
-        const SampledSpectrum sigma_r = k.medium.sigma_t(k.ray_index.at(t), k.prepared) - sigma_c;
-        T *= clamp_zero(SampledSpectrum(1.f) - sigma_r / rate);
-        return !all_zero(T, k.n);
+        const SampledSpectrum sigma_t = k.medium.sigma_t(k.ray_index.at(t), k.prepared);
+        bool any = false;
+        for (int i = 0; i < k.n; ++i) {  // rounding may push sigma_t a hair past the majorant: clamp
+          const float sigma_r = kResidual ? sigma_t[i] - sigma_c[i] : sigma_t[i];
+          T[i] *= std::max(0.f, 1.f - sigma_r * inv_rate);
+          any |= T[i] != 0.f;
+        }
+        return any;
       },
       [](const MajorantSegment&) {});
   return T;
@@ -86,7 +71,7 @@ SampledSpectrum residual_ratio_tracking(const Track& k, Rng& rng) {
 
 SampledSpectrum delta_tracking(const Track& k, Rng& rng) {
   SampledSpectrum T = detail::carried_lanes(k.n), sigma_maj;
-  float rate = 0.f;
+  float inv_rate = 0.f;
   const bool escaped = detail::walk_majorants(
       k.medium, k.ray_index, k.t_end, rng.uniform(), rng,
       [&](const MajorantSegment& s) {
@@ -95,14 +80,19 @@ SampledSpectrum delta_tracking(const Track& k, Rng& rng) {
           cut_unbounded(sigma_maj, k.n, &T);
           return 0.f;
         }
-        return rate = max_lane(sigma_maj, k.n);
+        const float rate = max_lane(sigma_maj, k.n);
+        inv_rate = 1.f / rate;
+        return rate;
       },
       [&](float t) {
-        const SampledSpectrum p_null =
-            clamp_zero(SampledSpectrum(1.f) - k.medium.sigma_t(k.ray_index.at(t), k.prepared) / rate);
-        const float P = max_lane(p_null, k.n);
+        const SampledSpectrum sigma_t = k.medium.sigma_t(k.ray_index.at(t), k.prepared);
+        float p_null[kMaxWavelengths], P = 0.f;
+        for (int i = 0; i < k.n; ++i) {
+          p_null[i] = std::max(0.f, 1.f - sigma_t[i] * inv_rate);
+          P = std::max(P, p_null[i]);
+        }
         if (!(rng.uniform() < P)) return false;  // a real collision: the path is absorbed
-        T *= p_null / P;
+        for (int i = 0; i < k.n; ++i) T[i] *= p_null[i] / P;
         return true;
       },
       [](const MajorantSegment&) {});
@@ -136,7 +126,7 @@ SampledSpectrum transmittance(const Ray& ray, float t_max, const SampledWaveleng
   const bool unbounded = t_max >= kInfinity;
   if (estimator == TransmittanceEstimator::closed_form) {
     if (medium.homogeneous()) {
-      SampledSpectrum T = detail::exp_neg_lanes(prepared.sigma_t_constant * (t_max * len), n);
+      SampledSpectrum T = detail::exp_neg_lanes(prepared.sigma_t_constant, t_max * len, n);
       if (unbounded) cut_unbounded(prepared.sigma_t_constant, n, &T);
       return T;
     }
@@ -145,9 +135,9 @@ SampledSpectrum transmittance(const Ray& ray, float t_max, const SampledWaveleng
   const Track k{medium, prepared, medium.index_ray({ray.o, ray.d / len}), t_max * len, unbounded, n,
                 medium.channels()};
   switch (estimator) {
-    case TransmittanceEstimator::ratio: return ratio_tracking(k, rng);
+    case TransmittanceEstimator::ratio: return ratio_tracking<false>(k, rng);
     case TransmittanceEstimator::delta: return delta_tracking(k, rng);
-    default: return residual_ratio_tracking(k, rng);
+    default: return ratio_tracking<true>(k, rng);
   }
 }
 
