@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <chrono>
+#include <stdexcept>
+
+#include <fmt/format.h>
 
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
@@ -19,19 +22,18 @@ struct Tile {
   int x0, y0, x1, y1;
 };
 
-std::vector<Tile> make_tiles(int width, int height) {
+// Tiles over image pixels [x0, x1) x [y0, y1).
+std::vector<Tile> make_tiles(int x0, int y0, int x1, int y1) {
   std::vector<Tile> tiles;
-  for (int y = 0; y < height; y += kTileSize)
-    for (int x = 0; x < width; x += kTileSize)
-      tiles.push_back({x, y, std::min(x + kTileSize, width), std::min(y + kTileSize, height)});
+  for (int y = y0; y < y1; y += kTileSize)
+    for (int x = x0; x < x1; x += kTileSize)
+      tiles.push_back({x, y, std::min(x + kTileSize, x1), std::min(y + kTileSize, y1)});
   return tiles;
 }
 
-// Passes grow 1, 1, 2, 4, 8, 8, ...: the first image appears fast, and an
-// interrupt loses at most one short pass.
-int next_pass_size(int done, int remaining) { return std::min(remaining, std::clamp(done, 1, 8)); }
-
-void render_tile(const Scene& scene, Film& film, const Tile& tile, int s0, int s1, uint64_t seed, PathStats& stats) {
+// `film` holds image pixels from (fx0, fy0) on.
+void render_tile(const Scene& scene, Film& film, int fx0, int fy0, const Tile& tile, int s0, int s1, uint64_t seed,
+                 PathStats& stats) {
   const int n_lambda = scene.settings.wavelengths;
   for (int y = tile.y0; y < tile.y1; ++y)
     for (int x = tile.x0; x < tile.x1; ++x)
@@ -41,13 +43,18 @@ void render_tile(const Scene& scene, Film& film, const Tile& tile, int s0, int s
         const Point2 film_pos{x + rng.uniform(), y + rng.uniform()};  // box filter
         const Ray ray = scene.camera.generate_ray(film_pos, Point2{rng.uniform(), rng.uniform()});
         const PathRadiance L = trace_path(scene, ray, scene.camera_medium, lambda, rng, stats);
-        film.add_sample(x, y, kLayerTotal, L.fluorescence + L.other, lambda);
-        film.add_sample(x, y, kLayerFluorescence, L.fluorescence, lambda);
-        film.add_sample(x, y, kLayerNonFluorescence, L.other, lambda);
+        film.add_sample(x - fx0, y - fy0, kLayerTotal, L.fluorescence + L.other, lambda);
+        film.add_sample(x - fx0, y - fy0, kLayerFluorescence, L.fluorescence, lambda);
+        film.add_sample(x - fx0, y - fy0, kLayerNonFluorescence, L.other, lambda);
       }
 }
 
 }  // namespace
+
+// Passes grow 1, 1, 2, 4, 8, 8, ...: the first image appears fast, and an
+// interrupt loses at most one short pass. A function of `done` only (and of the
+// total at the very end), so a resumed render repeats the same passes.
+int pass_size(int done, int total) { return std::min(total - done, std::clamp(done, 1, 8)); }
 
 std::vector<std::string> film_layer_names() { return {"total", "fluorescence", "nonfluorescence"}; }
 
@@ -60,21 +67,28 @@ RenderStats render(const Scene& scene, Film& film, const RenderOptions& options)
   RenderStats result;
   const auto start = std::chrono::steady_clock::now();
   const int width = scene.settings.width, height = scene.settings.height;
-  const std::vector<Tile> tiles = make_tiles(width, height);
+  const int fx0 = options.film_x0, fy0 = options.film_y0;
+  if (fx0 < 0 || fy0 < 0 || fx0 + film.width() > width || fy0 + film.height() > height)
+    throw std::invalid_argument(fmt::format("render: a {}x{} film at ({}, {}) does not fit the {}x{} image", film.width(),
+                                            film.height(), fx0, fy0, width, height));
+  if (options.samples_done < 0 || options.samples_done > options.spp || options.first_sample < 0)
+    throw std::invalid_argument(fmt::format("render: samples_done {} outside [0, spp = {}] or first_sample {} < 0",
+                                            options.samples_done, options.spp, options.first_sample));
+  const std::vector<Tile> tiles = make_tiles(fx0, fy0, fx0 + film.width(), fy0 + film.height());
   tbb::enumerable_thread_specific<PathStats> stats;
   tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
   const bool spectral = film.spectral_bins() > 0;
   std::unique_ptr<Progress> progress;
-  if (options.show_progress) progress = std::make_unique<Progress>(int64_t(tiles.size()) * options.spp, "render");
+  if (options.show_progress) progress = std::make_unique<Progress>(int64_t(tiles.size()) * (options.spp - options.samples_done), "render");
 
   auto stopped = [&] { return options.stop && options.stop->load(std::memory_order_relaxed); };
-  int done = 0;
+  int done = options.samples_done;
   while (done < options.spp && !stopped()) {
-    const int count = next_pass_size(done, options.spp - done);
+    const int count = pass_size(done, options.spp);
     const int s0 = options.first_sample + done;
     // Each pass renders into its own film, merged only when complete, so an
     // interrupted pass never leaves pixels with fewer samples than the others.
-    Film pass(width, height, film.layer_names(), film.color_space());
+    Film pass(film.width(), film.height(), film.layer_names(), film.color_space());
     if (spectral) pass.enable_spectral(film.spectral_min_nm(), film.spectral_max_nm(), film.spectral_bins());
     std::atomic<bool> pass_complete{true};
     arena.execute([&] {
@@ -84,7 +98,7 @@ RenderStats render(const Scene& scene, Film& film, const RenderOptions& options)
             pass_complete = false;
             return;
           }
-          render_tile(scene, pass, tiles[t], s0, s0 + count, options.seed, stats.local());
+          render_tile(scene, pass, fx0, fy0, tiles[t], s0, s0 + count, options.seed, stats.local());
           if (progress) progress->add(count);
         }
       });

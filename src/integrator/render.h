@@ -3,6 +3,13 @@
 // Every (pixel, sample) pair has its own random stream, so an image depends
 // only on the seed and the sample range, never on the thread count or the
 // order tiles finish in.
+//
+// Summation order, which makes resumed renders bit-identical: a pass renders
+// samples [s0, s1) of every pixel into a zeroed pass film, each pixel's samples
+// in increasing index; the completed pass is then added to `film`. Pass sizes
+// depend only on the number of samples done (1, 1, 2, 4, 8, 8, ...), so a render
+// resumed after k complete passes (samples_done) performs the same additions in
+// the same order as one that never stopped.
 #include <atomic>
 #include <functional>
 
@@ -14,17 +21,25 @@ namespace chlorovdb {
 struct RenderOptions {
   int first_sample = 0;  // render samples [first_sample, first_sample + spp) of every pixel
   int spp = 1;
+  // Resume: samples [first_sample, first_sample + samples_done) are already in
+  // `film` (from a checkpoint written at a pass boundary); continue after them.
+  int samples_done = 0;
+  // Crop: the film covers image pixels [film_x0, film_x0 + film.width()) x
+  // [film_y0, film_y0 + film.height()); pixel (x, y) goes to film pixel
+  // (x - film_x0, y - film_y0) and keeps its own random streams.
+  int film_x0 = 0, film_y0 = 0;
   int threads = 0;  // 0: all cores
   uint64_t seed = 0;
   const std::atomic<bool>* stop = nullptr;  // set asynchronously (Ctrl-C): stop after the current tiles
   bool show_progress = false;
-  // Called after each completed pass with the samples done so far (checkpoints).
+  // Called after each completed pass, once `film` holds it, with the samples
+  // done so far (counted from first_sample): the moment to write a checkpoint.
   std::function<void(int samples_done)> on_pass;
 };
 
 struct RenderStats {
   double seconds = 0;
-  int samples_done = 0;  // complete passes: every pixel has this many samples
+  int samples_done = 0;  // complete passes: every pixel has this many samples (including options.samples_done)
   bool interrupted = false;
   PathStats paths;
 };
@@ -35,7 +50,12 @@ std::vector<std::string> film_layer_names();
 
 // Accumulates samples into `film`. An interrupted render keeps only complete
 // passes, so the image it writes is unbiased with `samples_done` samples.
+// Throws std::invalid_argument when the film (with its offset) does not fit the
+// image or samples_done is outside [0, spp].
 RenderStats render(const Scene& scene, Film& film, const RenderOptions& options);
+
+// Samples in the pass that starts after `done` of `total` (the fixed schedule above).
+int pass_size(int done, int total);
 
 // The per-sample random stream (exposed for tests).
 Rng sample_rng(uint64_t seed, int x, int y, int sample);
