@@ -75,9 +75,14 @@ float direct_excitation(const Scene& scene, const FluorescentPigment& fp, const 
   ++stats.excitation_rays;
   PreparedMedia media(scene, wl);
   // Thin glass walls barely deviate a ray: cross them straight with Fresnel
-  // transmission so delta lights can excite liquid inside a vessel (docs/fluorescence.md).
-  const DielectricCrossing glass = scene.settings.excitation_through_glass ? DielectricCrossing::straight_through_fresnel
-                                                                           : DielectricCrossing::block;
+  // transmission so delta lights can excite liquid inside a vessel
+  // (docs/fluorescence.md). In full mode, continuation paths refract through
+  // glass to area and environment lights exactly, so for those the excitation
+  // ray must stop at glass or that light would be counted twice.
+  const bool continuations_reach_light = scene.settings.fluorescence == FluorescenceMode::full && !ls->is_delta;
+  const DielectricCrossing glass = scene.settings.excitation_through_glass && !continuations_reach_light
+                                       ? DielectricCrossing::straight_through_fresnel
+                                       : DielectricCrossing::block;
   const SampledSpectrum T =
       trace_transmittance(scene, ShadowOrigin{x, medium, nullptr}, ls->wi, ls->p_light, ls->is_infinite, media, rng, glass);
   if (T[0] == 0.f) return 0.f;
