@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <stdexcept>
+#include <time.h>
 
 #include <fmt/format.h>
 
@@ -17,6 +18,12 @@ Film make_film(const Scene& scene) {
   Film film(scene.settings.width, scene.settings.height, film_layer_names(), scene.settings.color_space);
   if (scene.settings.spectral_bins > 0) film.enable_spectral(kLambdaMin, kLambdaMax, scene.settings.spectral_bins);
   return film;
+}
+
+double process_cpu_seconds() {
+  timespec ts{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
 }
 
 bool stopped(const std::atomic<bool>* stop) { return stop && stop->load(std::memory_order_relaxed); }
@@ -35,12 +42,14 @@ std::vector<ConvergencePoint> run_convergence(const Scene& scene, const Image& r
   Film film = make_film(scene);
   std::vector<ConvergencePoint> points;
   int done = 0;
-  double seconds = 0;
+  double seconds = 0, cpu_seconds = 0;
+  auto elapsed = [&] { return o.clock == Clock::wall ? seconds : cpu_seconds; };
   size_t next_spp = 0, next_budget = 0;
   auto measure = [&](double budget) {
     ConvergencePoint p;
     p.spp = done;
     p.seconds = seconds;
+    p.cpu_seconds = cpu_seconds;
     p.time_budget = budget;
     Image image = film.to_image(done);
     p.errors = image_errors(image, reference);
@@ -54,8 +63,8 @@ std::vector<ConvergencePoint> run_convergence(const Scene& scene, const Image& r
     // budget is overshot by at most about one sample per pixel.
     int chunk = next_spp < spp.size() ? spp[next_spp] - done : (1 << 30);
     if (next_budget < budgets.size()) {
-      const double per_sample = done > 0 ? seconds / done : 0.0;
-      const double left = budgets[next_budget] - seconds;
+      const double per_sample = done > 0 ? elapsed() / done : 0.0;
+      const double left = budgets[next_budget] - elapsed();
       const int by_time = per_sample > 0 ? int(std::clamp(std::floor(0.9 * left / per_sample), 1.0, 1e6)) : 1;
       chunk = std::min(chunk, by_time);
     }
@@ -65,7 +74,9 @@ std::vector<ConvergencePoint> run_convergence(const Scene& scene, const Image& r
     ro.threads = o.threads;
     ro.seed = o.seed;
     ro.stop = o.stop;
+    const double cpu0 = process_cpu_seconds();
     const RenderStats stats = render(scene, film, ro);
+    cpu_seconds += process_cpu_seconds() - cpu0;
     done += stats.samples_done;
     seconds += stats.seconds;
     if (stats.interrupted) break;
@@ -73,7 +84,7 @@ std::vector<ConvergencePoint> run_convergence(const Scene& scene, const Image& r
       measure(0.0);
       ++next_spp;
     }
-    while (next_budget < budgets.size() && budgets[next_budget] <= seconds) {
+    while (next_budget < budgets.size() && budgets[next_budget] <= elapsed()) {
       measure(budgets[next_budget]);
       ++next_budget;
     }

@@ -16,10 +16,17 @@
 
 namespace chlorovdb {
 
+// Which time budgets and efficiencies are measured in. Wall time is what a user
+// waits; process CPU time (summed over threads) is what a shared machine's
+// other load does not distort, and ranks estimators the same on an idle one.
+enum class Clock { wall, cpu };
+
 struct ConvergencePoint {
   int spp = 0;
   double seconds = 0;        // wall time of the rendering alone (no loading, no error computation)
-  double time_budget = 0;    // the budget this point answers (0: a sample-count point)
+  double cpu_seconds = 0;    // process CPU time over the same renders
+  double time_budget = 0;    // the budget this point answers (0: a sample-count point), in options.clock
+  double time(Clock c) const { return c == Clock::wall ? seconds : cpu_seconds; }
   std::vector<LayerError> errors;
   Image image;               // the estimate at this point
 };
@@ -27,6 +34,7 @@ struct ConvergencePoint {
 struct ConvergenceOptions {
   std::vector<int> spp;                // sample counts at which to measure
   std::vector<double> time_budgets;    // seconds of rendering at which to measure (the first pass boundary after each)
+  Clock clock = Clock::wall;           // what the budgets count
   int threads = 0;                     // 0: all cores
   uint64_t seed = 0;
   const std::atomic<bool>* stop = nullptr;

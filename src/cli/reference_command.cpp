@@ -59,9 +59,10 @@ Metadata settings_metadata(const Scene& scene, const ReferenceArgs& a) {
   m.set("max_depth", s.max_depth);
   m.set("fluorescence", fluorescence_name(s.fluorescence));
   m.set("transmittance", s.transmittance_auto ? "auto" : to_string(s.transmittance));
+  // Written only when given: EXR drops empty string attributes (a missing key reads as "").
   std::string sets;
   for (const std::string& x : a.sets) sets += (sets.empty() ? "" : " ") + x;
-  m.set("scene_sets", sets);
+  if (!sets.empty()) m.set("scene_sets", sets);
   return m;
 }
 
@@ -120,11 +121,13 @@ int reference(const ReferenceArgs& a) {
     if (!done || !std::holds_alternative<int>(*done))
       throw InputError(out.string(), "spp_done", "", "not a chlorovdb reference (no spp_done metadata): cannot resume");
     previous_spp = std::get<int>(*done);
-    for (const auto& [key, value] : settings.entries) {
-      const MetadataValue* v = previous->metadata.find(key);
-      if (!v || value_text(*v) != value_text(value))
-        throw InputError(out.string(), key, v ? value_text(*v) : "(missing)",
-                         "differs from this run's " + value_text(value) + ": cannot resume a different render");
+    for (const char* key : {"seed", "resolution", "wavelengths_per_path", "max_depth", "fluorescence", "transmittance", "scene_sets"}) {
+      const MetadataValue* was = previous->metadata.find(key);
+      const MetadataValue* now = settings.find(key);
+      const std::string a_text = was ? value_text(*was) : "", b_text = now ? value_text(*now) : "";
+      if (a_text != b_text)
+        throw InputError(out.string(), key, a_text.empty() ? "(none)" : a_text,
+                         "differs from this run's " + (b_text.empty() ? "(none)" : b_text) + ": cannot resume a different render");
     }
     fmt::print(stderr, "resuming {} at {} of {} spp\n", out.string(), previous_spp, a.spp);
   } else if (a.resume) {

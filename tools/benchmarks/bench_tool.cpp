@@ -8,6 +8,7 @@
 #include <fstream>
 #include <map>
 #include <sstream>
+#include <time.h>
 
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
@@ -26,46 +27,60 @@ namespace {
 // ---- converge CSVs -------------------------------------------------------
 
 struct Row {
-  std::string label, layer;
+  std::string label, layer, clock;
   int spp = 0;
   double seconds = 0, budget = 0, mse = 0, rmse = 0, rel_mse = 0, bias = 0, efficiency = 0;
 };
 
+// Columns by name (converge's header), so the CSV can grow. `seconds` is the
+// time of the clock the run measured budgets in (wall or cpu).
 std::vector<Row> read_rows(const std::vector<std::string>& files, const std::string& layer) {
   std::vector<Row> rows;
+  auto split = [](const std::string& line) {
+    std::vector<std::string> c;
+    std::stringstream ss(line);
+    for (std::string cell; std::getline(ss, cell, ',');) c.push_back(cell);
+    return c;
+  };
   for (const std::string& file : files) {
     std::ifstream f(file);
     if (!f) throw InputError(file, "", "", "cannot be read");
     std::string line;
-    std::getline(f, line);  // header
+    std::getline(f, line);
+    std::map<std::string, size_t> col;
+    const auto header = split(line);
+    for (size_t i = 0; i < header.size(); ++i) col[header[i]] = i;
+    for (const char* need : {"label", "spp", "wall_seconds", "cpu_seconds", "clock", "time_budget", "layer", "mse", "rmse",
+                             "rel_mse", "bias", "efficiency"})
+      if (!col.count(need)) throw InputError(file, need, "", "missing column (not a chlorovdb converge CSV?)");
     while (std::getline(f, line)) {
-      std::vector<std::string> c;
-      std::stringstream ss(line);
-      for (std::string cell; std::getline(ss, cell, ',');) c.push_back(cell);
-      if (c.size() < 11 || c[4] != layer) continue;
+      const auto c = split(line);
+      if (c.size() < header.size() || c[col["layer"]] != layer) continue;
       Row r;
-      r.label = c[0];
-      r.spp = std::stoi(c[1]);
-      r.seconds = std::stod(c[2]);
-      r.budget = std::stod(c[3]);
-      r.layer = c[4];
-      r.mse = std::stod(c[5]);
-      r.rmse = std::stod(c[6]);
-      r.rel_mse = std::stod(c[7]);
-      r.bias = std::stod(c[8]);
-      r.efficiency = std::stod(c[10]);
+      r.label = c[col["label"]];
+      r.clock = c[col["clock"]];
+      r.spp = std::stoi(c[col["spp"]]);
+      r.seconds = std::stod(c[col[c[col["clock"]] == "cpu" ? "cpu_seconds" : "wall_seconds"]]);
+      r.budget = std::stod(c[col["time_budget"]]);
+      r.layer = c[col["layer"]];
+      r.mse = std::stod(c[col["mse"]]);
+      r.rmse = std::stod(c[col["rmse"]]);
+      r.rel_mse = std::stod(c[col["rel_mse"]]);
+      r.bias = std::stod(c[col["bias"]]);
+      r.efficiency = std::stod(c[col["efficiency"]]);
       rows.push_back(r);
     }
   }
   return rows;
 }
 
-int plot(const std::vector<std::string>& files, const std::string& layer, const std::string& title, const std::string& out) {
+int plot(const std::vector<std::string>& files, const std::string& layer, const std::string& title, const std::string& out,
+         const std::string& time_label) {
   const std::vector<Row> rows = read_rows(files, layer);
   std::vector<std::string> labels;
   for (const Row& r : rows)
     if (std::find(labels.begin(), labels.end(), r.label) == labels.end()) labels.push_back(r.label);
-  LogLogPanel by_time{title + ": RMSE (" + layer + ") against time", "render time (s)", "RMSE", {}, -0.5};
+  LogLogPanel by_time{title + ": RMSE (" + layer + ") against time", time_label, "RMSE", {}, -0.5};
   LogLogPanel by_spp{"RMSE (" + layer + ") against samples", "samples per pixel", "RMSE", {}, -0.5};
   for (const std::string& label : labels) {
     PlotSeries t{label, {}, {}}, s{label, {}, {}};
@@ -93,7 +108,9 @@ int table(const std::vector<std::string>& files, const std::string& layer, const
     if (!last.count(r.label) || r.seconds >= last[r.label].seconds) last[r.label] = r;
   }
   const double base = last.count(baseline) ? last[baseline].efficiency : 0.0;
-  fmt::print("| variant | spp | time (s) | RMSE | relMSE | efficiency 1/(MSE·s) | vs {} |\n", baseline);
+  const std::string clock = rows.empty() ? "wall" : rows.front().clock;
+  fmt::print("| variant | spp | {} time (s) | RMSE | relMSE | efficiency 1/(MSE·s) | vs {} |\n", clock == "cpu" ? "CPU" : "wall",
+             baseline);
   fmt::print("| --- | ---: | ---: | ---: | ---: | ---: | ---: |\n");
   for (const std::string& label : labels) {
     const Row& r = last[label];
@@ -170,15 +187,23 @@ std::filesystem::path write_cube_scene(const std::filesystem::path& dir, const s
   return path;
 }
 
-// Seconds per camera sample (per pixel sample), from a render long enough to time.
+// CPU seconds (summed over threads: robust to other load on a shared machine)
+// per camera sample (per pixel sample), from a render long enough to time.
 double seconds_per_sample(const Scene& scene, int threads) {
+  auto cpu = [] {
+    timespec ts{};
+    clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+    return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
+  };
   auto run = [&](int spp) {
     Film film(scene.settings.width, scene.settings.height, film_layer_names(), scene.settings.color_space);
     RenderOptions o;
     o.spp = spp;
     o.threads = threads;
     o.seed = 7;
-    return render(scene, film, o).seconds;
+    const double t0 = cpu();
+    render(scene, film, o);
+    return cpu() - t0;
   };
   const double t1 = run(1);
   const int spp = int(std::clamp(0.6 / std::max(t1, 1e-6), 1.0, 256.0));
@@ -206,8 +231,8 @@ int cost_growth(const std::filesystem::path& out, bool large, int threads) {
                                       {"absorbing: ratio tracking", false, "ratio"},
                                       {"absorbing: residual ratio tracking", false, "residual_ratio"},
                                       {"absorbing: delta tracking", false, "delta"}};
-  LogLogPanel tau_panel{"time per sample against optical depth (64³ grid)", "optical depth across the cube", "µs per sample", {}, {}};
-  md += "| series | exponent k (time ∝ τ^k) | µs/sample at τ = 1 | at τ = 1000 |\n| --- | ---: | ---: | ---: |\n";
+  LogLogPanel tau_panel{"time per sample against optical depth (64³ grid)", "optical depth across the cube", "CPU µs per sample", {}, {}};
+  md += "| series | exponent k (time ∝ τ^k) | CPU µs/sample at τ = 1 | at τ = 1000 |\n| --- | ---: | ---: | ---: |\n";
   for (const Series& s : series) {
     PlotSeries p{s.name, {}, {}};
     for (double tau : taus) {
@@ -231,9 +256,9 @@ int cost_growth(const std::filesystem::path& out, bool large, int threads) {
   // 2. Grid size at optical depth 10 (scattering), dense and sparse.
   std::vector<int> sizes = {64, 128, 256};
   if (large) sizes.push_back(512);
-  LogLogPanel size_panel{"time per sample against grid size (τ = 10)", "voxels per axis N", "µs per sample", {}, {}};
+  LogLogPanel size_panel{"time per sample against grid size (τ = 10)", "voxels per axis N", "CPU µs per sample", {}, {}};
   md += "\n| grid | exponent k (time ∝ N^k) | " ;
-  for (int n : sizes) md += fmt::format("µs/sample at {}³ | ", n);
+  for (int n : sizes) md += fmt::format("CPU µs/sample at {}³ | ", n);
   md += "\n| --- | ---: |";
   for (size_t i = 0; i < sizes.size(); ++i) md += " ---: |";
   md += "\n";
@@ -277,6 +302,8 @@ int main(int argc, char** argv) {
   p->add_option("--layer", layer);
   p->add_option("--title", title);
   p->add_option("-o,--output", out)->required();
+  std::string time_label = "render time (s)";
+  p->add_option("--time-label", time_label, "x-axis label of the time panel");
   CLI::App* t = app.add_subcommand("table", "Markdown efficiency table from converge CSVs");
   t->add_option("csv", files)->required();
   t->add_option("--layer", layer);
@@ -295,7 +322,7 @@ int main(int argc, char** argv) {
   c->add_option("--threads", threads);
   CLI11_PARSE(app, argc, argv);
   try {
-    if (p->parsed()) return plot(files, layer, title, out);
+    if (p->parsed()) return plot(files, layer, title, out, time_label);
     if (t->parsed()) return table(files, layer, baseline);
     if (b->parsed()) return best(files, layer, baseline, candidates);
     return cost_growth(out, large, threads);

@@ -6,9 +6,11 @@
 # For every scene in scenes/*.json (or $SCENES): a high-sample reference
 # (`chlorovdb reference`, cached and resumed in $OUT), then every estimator
 # variant rendered at EQUAL TIME (`chlorovdb converge --time-budgets`), scored by
-# efficiency = 1 / (MSE x time) of the total layer against the reference; then
+# efficiency = 1 / (MSE x CPU time) of the total layer against the reference; then
 # the cost-growth study (chlorovdb_bench cost-growth). Environment knobs:
-#   BUDGET=4         seconds of rendering per variant (also measured at 1/8, 1/4, 1/2 of it)
+#   BUDGET=4         CPU seconds of rendering per variant (also measured at 1/8, 1/4, 1/2 of it);
+#                    CPU time (summed over threads), not wall time, so other load on a shared
+#                    machine does not skew the comparison
 #   REF_SPP=2048     samples per pixel of each reference
 #   RESOLUTION=160x120  image size of references and variants
 #   THREADS=2        worker threads
@@ -79,7 +81,7 @@ for scene in "${scenes[@]}"; do
     csv="$dir/${label//[=]/-}"
     # shellcheck disable=SC2086
     if "$CHLOROVDB" converge "$scene" --reference "$dir/reference.exr" --resolution "$RESOLUTION" \
-         --threads "$THREADS" --spp 1 --time-budgets "$budgets" --label "$label" $flags -o "$csv" \
+         --threads "$THREADS" --spp 1 --clock cpu --time-budgets "$budgets" --label "$label" $flags -o "$csv" \
          > "$csv.log" 2>&1; then
       csvs+=("$csv.csv")
     else
@@ -94,7 +96,7 @@ for scene in "${scenes[@]}"; do
       [[ "$l" == default || "$l" =~ $2 ]] && files+=("$f")
     done
     [ ${#files[@]} -gt 1 ] || return 0
-    "$CHLOROVDB_BENCH" plot "${files[@]}" --title "$name, $1" -o "$FIG/$name-$3.svg"
+    "$CHLOROVDB_BENCH" plot "${files[@]}" --title "$name, $1" --time-label "render CPU time (s)" -o "$FIG/$name-$3.svg"
     printf '\n**%s** ([plot](benchmarks/%s-%s.svg))\n\n' "$1" "$name" "$3"
     "$CHLOROVDB_BENCH" table "${files[@]}" --baseline default
   }
@@ -140,9 +142,11 @@ a few per cent of noise). Do not edit by hand: rerun the command.
 ## Method
 
 Each scene in \`scenes/\` gets a reference (\`chlorovdb reference\`, ${REF_SPP} spp, seed ${REF_SEED}, the
-scene's own unbiased settings) and then every variant renders for the same wall time with seed 0
-(\`chlorovdb converge --time-budgets\`). **Efficiency = 1 / (MSE × time)** of the total layer
-(linear RGB, all pixels and channels) against the reference; higher is better; "vs default" is
+scene's own unbiased settings) and then every variant renders for the same CPU time with seed 0
+(\`chlorovdb converge --clock cpu --time-budgets\`). **Efficiency = 1 / (MSE × time)** of the total layer
+(linear RGB, all pixels and channels) against the reference, time being the process CPU time
+of the rendering (summed over its threads: the machine is shared, and CPU time is what other
+load does not distort); higher is better; "vs default" is
 the ratio to the scene's own settings. MSE includes the reference's own variance, about
 spp/${REF_SPP} of a variant's MSE for the same estimator, and the squared bias of a biased
 variant (the thesis's estimator; \`direct\` where it is not exact), as it should: a biased
@@ -161,7 +165,7 @@ ${uvb_lines:-No scene lit by a UVB lamp with a fluorescent pigment was benchmark
 
 ## Cost growth
 
-Time per camera sample (32×32 image, 4 wavelengths, max depth 64) in a 1 m cube of a grey
+CPU time per camera sample (summed over threads; 32×32 image, 4 wavelengths, max depth 64) in a 1 m cube of a grey
 medium whose density pattern spans 0.2–1 (so majorants are loose), lit by a distant light and
 an environment. Optical depth τ = σ_t across the cube where density = 1; k is the fitted
 exponent over τ ≥ 10. Grid size at τ = 10 (albedo 0.9), dense and sparse (a ball holding 11 %
