@@ -1,0 +1,188 @@
+"""Tests of the chlorovdb Python module (run by CTest as `python_bindings`).
+
+Run by hand from a build with -DCHLOROVDB_PYTHON=ON:
+    PYTHONPATH=build-robust/python CHLOROVDB_SPECTRA=$PWD/spectra \
+        /usr/bin/python3 -m unittest -v python/tests/test_chlorovdb.py
+"""
+import json
+import math
+import os
+import pathlib
+import tempfile
+import unittest
+
+import numpy as np
+
+import chlorovdb
+
+SOURCE_DIR = pathlib.Path(os.environ.get("CHLOROVDB_SOURCE_DIR", pathlib.Path(__file__).resolve().parents[2]))
+
+# A sphere of dye (absorbs UV/blue and its red band, emits near 680 nm) on a floor,
+# under a white environment and a UV distant light.
+DYE_SCENE = {
+    "render": {"resolution": [8, 6], "spp": 2, "wavelengths": 4, "fluorescence": "full"},
+    "camera": {"position": [0, 1, 4], "look_at": [0, 0.3, 0], "fov": 35},
+    "pigments": {"dye": {"extinction": {"table": {"lambda": [250, 480, 481, 640, 660, 700, 701],
+                                                  "value": [3e4, 3e4, 0, 0, 8e4, 0, 0]}},
+                         "quantum_yield": 0.6, "emission": {"gaussian": [680, 12]}}},
+    "materials": {"boundary": {"type": "interface"}, "floor": {"type": "diffuse", "albedo": 0.7}},
+    "media": {"dye": {"solvent": "water", "pigments": [{"pigment": "dye", "concentration": 20}]}},
+    "shapes": [{"type": "sphere", "center": [0, 0.5, 0], "radius": 0.5, "material": "boundary", "inside": "dye"},
+               {"type": "quad", "corner": [-3, 0, -3], "edge_u": [0, 0, 6], "edge_v": [6, 0, 0],
+                "material": "floor"}],
+    "lights": [{"type": "environment", "spectrum": "D65", "scale": 0.01},
+               {"type": "distant", "direction": [0, -1, 0], "spectrum": {"gaussian": [320, 15]}, "scale": 1}],
+}
+
+
+def unit_cube_mesh(size):
+    v = np.array([[x, y, z] for z in (0, size) for y in (0, size) for x in (0, size)], dtype=np.float32)
+    # Outward-facing triangles of the 8-corner cube (index = x + 2 y + 4 z).
+    quads = [(0, 2, 3, 1), (4, 5, 7, 6), (0, 1, 5, 4), (2, 6, 7, 3), (0, 4, 6, 2), (1, 3, 7, 5)]
+    tris = []
+    for a, b, c, d in quads:
+        tris += [(a, b, c), (a, c, d)]
+    return v, np.array(tris, dtype=np.int64)
+
+
+class ChlorovdbTest(unittest.TestCase):
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = tempfile.TemporaryDirectory(prefix="chlorovdb_python_test_")
+        cls.dir = pathlib.Path(cls.tmp.name)
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.tmp.cleanup()
+
+    def write_scene(self, name, scene):
+        path = self.dir / f"{name}.json"
+        path.write_text(json.dumps(scene))
+        return path
+
+    def test_module_basics(self):
+        self.assertTrue(chlorovdb.__version__)
+        self.assertIn("D65", chlorovdb.spectrum_names())
+        self.assertTrue(issubclass(chlorovdb.InputError, ValueError))
+
+    def test_load_scene_with_overrides(self):
+        scene = chlorovdb.load_scene(SOURCE_DIR / "scenes" / "default.json", width=16, height=12, spp=3,
+                                     wavelengths=4, seed=9, fluorescence="direct")
+        self.assertEqual((scene.width, scene.height, scene.spp, scene.wavelengths, scene.seed), (16, 12, 3, 4, 9))
+        self.assertEqual(scene.fluorescence, "direct")
+        self.assertTrue(scene.has_fluorescence)
+        self.assertIn("solution", scene.media)
+
+    def test_input_errors_name_file_key_and_value(self):
+        bad = dict(DYE_SCENE)
+        bad["camera"] = {"position": [0, 0, 4], "look_at": [0, 0, 0], "fvo": 30}
+        path = self.write_scene("bad_key", bad)
+        with self.assertRaises(chlorovdb.InputError) as ctx:
+            chlorovdb.load_scene(path)
+        message = str(ctx.exception)
+        self.assertIn("bad_key.json", message)
+        self.assertIn("camera.fvo", message)
+        self.assertIn("fov", message)  # the "did you mean"
+        with self.assertRaises(chlorovdb.InputError):
+            chlorovdb.load_scene(path.with_name("missing.json"))
+        with self.assertRaises(chlorovdb.InputError):
+            chlorovdb.load_scene(self.write_scene("ok", DYE_SCENE), fluorescence="fulll")
+        with self.assertRaises(chlorovdb.InputError):
+            chlorovdb.load_scene(self.write_scene("ok", DYE_SCENE), spp=0)
+
+    def test_render_layers_are_float32_hxwx3_and_add_up(self):
+        scene = chlorovdb.load_scene(self.write_scene("dye", DYE_SCENE))
+        result = chlorovdb.render(scene, spp=4, threads=1, seed=3)
+        self.assertEqual(set(result.layers), {"total", "fluorescence", "nonfluorescence"})
+        for name, image in result.layers.items():
+            self.assertEqual(image.shape, (6, 8, 3), name)
+            self.assertEqual(image.dtype, np.float32, name)
+            self.assertTrue(np.all(np.isfinite(image)), name)
+        total, fl, other = result["total"], result["fluorescence"], result["nonfluorescence"]
+        np.testing.assert_allclose(total, fl + other, rtol=1e-4, atol=1e-7)
+        self.assertGreater(float(fl.sum()), 0.0)
+        self.assertEqual(result.samples_per_pixel, 4)
+        self.assertEqual(result.nonfinite_samples, 0)
+        self.assertGreaterEqual(result.paths, 6 * 8 * 4)  # camera paths plus excitation continuations
+        self.assertIsNone(result.spectral)
+        self.assertEqual(result.metadata["nonfinite_samples"], 0)
+
+    def test_render_is_deterministic_across_thread_counts(self):
+        scene = chlorovdb.load_scene(self.write_scene("dye", DYE_SCENE))
+        one = chlorovdb.render(scene, spp=3, threads=1, seed=5)
+        two = chlorovdb.render(scene, spp=3, threads=2, seed=5)
+        for name in one.layers:
+            np.testing.assert_array_equal(one[name], two[name])
+        other_seed = chlorovdb.render(scene, spp=3, threads=1, seed=6)
+        self.assertFalse(np.array_equal(one["total"], other_seed["total"]))
+
+    def test_spectral_bins_give_per_pixel_spectra(self):
+        # Camera looking at an empty white furnace: spectral radiance 1 in every bin.
+        furnace = {"render": {"resolution": [6, 4], "wavelengths": 8},
+                   "camera": {"position": [0, 0, 1], "look_at": [0, 0, 0]},
+                   "lights": [{"type": "environment", "spectrum": 1}]}
+        scene = chlorovdb.load_scene(self.write_scene("furnace", furnace))
+        result = chlorovdb.render(scene, spp=64, threads=1, spectral_bins=10)
+        spectral = result.spectral
+        self.assertEqual(spectral.shape, (4, 6, 10))
+        self.assertEqual(spectral.dtype, np.float32)
+        self.assertEqual(result.wavelengths_nm.shape, (10,))
+        self.assertAlmostEqual(result.bin_width_nm, 47.0, places=4)
+        self.assertAlmostEqual(float(result.wavelengths_nm[0]), 360 + 23.5, places=3)
+        self.assertTrue(np.all(np.isfinite(spectral)))
+        self.assertAlmostEqual(float(spectral.mean()), 1.0, delta=0.05)
+        np.testing.assert_allclose(spectral.mean(axis=(0, 1)), np.ones(10), rtol=0.3)
+        # Spectra of the dye scene: fluorescence puts energy near 680 nm.
+        dye = chlorovdb.render(chlorovdb.load_scene(self.write_scene("dye", DYE_SCENE)), spp=2, spectral_bins=47)
+        self.assertEqual(dye.spectral.shape, (6, 8, 47))
+        self.assertTrue(np.all(np.isfinite(dye.spectral)))
+
+    def test_grid_round_trip_and_render(self):
+        rng = np.random.default_rng(1)
+        values = rng.uniform(0.5, 2.0, size=(5, 4, 3)).astype(np.float32)  # [z, y, x]
+        path = self.dir / "blob.vdb"
+        chlorovdb.write_grid(path, values, voxel_size=0.05, origin=(2, -3, 4), unit="uM", provenance="test")
+        read, lo, world_from_index, meta = chlorovdb.read_grid(path)
+        # The stored box is whole 8^3 leaves around the voxels written; the rest is background.
+        self.assertTrue(all(l <= o and l % 8 == 0 for l, o in zip(lo, (2, -3, 4))), lo)
+        x0, y0, z0 = 2 - lo[0], -3 - lo[1], 4 - lo[2]
+        np.testing.assert_array_equal(read[z0:z0 + 5, y0:y0 + 4, x0:x0 + 3], values)
+        self.assertAlmostEqual(float(read.sum()), float(values.sum()), places=2)
+        self.assertAlmostEqual(float(world_from_index[0, 0]), 0.05, places=6)
+        self.assertEqual(meta["unit"], "uM")
+        self.assertEqual(meta["provenance"], "test")
+        scene = {"render": {"resolution": [6, 6], "wavelengths": 4},
+                 "camera": {"position": [0.2, 0.0, 2.0], "look_at": [0.2, -0.05, 0.3]},
+                 "pigments": {"chl": {"extinction": "chlorophyll_a", "quantum_yield": 0.3}},
+                 "media": {"blob": {"pigments": [{"pigment": "chl", "grid": {"file": "blob.vdb", "scale": 100}}]}},
+                 "lights": [{"type": "environment", "spectrum": "D65", "scale": 0.01},
+                            {"type": "distant", "direction": [0, 0, -1], "spectrum": "UVB", "scale": 1}]}
+        result = chlorovdb.render(chlorovdb.load_scene(self.write_scene("grid", scene)), spp=4, threads=1)
+        self.assertTrue(np.all(np.isfinite(result["total"])))
+        self.assertEqual(result.nonfinite_samples, 0)
+        with self.assertRaises(chlorovdb.InputError):
+            chlorovdb.read_grid(path, "nope")
+        with self.assertRaises(chlorovdb.InputError):
+            chlorovdb.write_grid(self.dir / "bad.vdb", values, voxel_size=-1.0)
+
+    @unittest.skipUnless(getattr(chlorovdb, "HAVE_VOXELIZE", False), "built without src/voxelize")
+    def test_voxelize_mesh_fills_the_cube(self):
+        vertices, triangles = unit_cube_mesh(0.01)  # 1 cm cube
+        out = self.dir / "cube.vdb"
+        report = chlorovdb.voxelize_mesh(vertices, triangles, out, voxel_size=0.001, concentration=5.0, unit="uM")
+        self.assertAlmostEqual(report["filled_volume_m3"], 1e-6, delta=0.02e-6)
+        self.assertGreater(report["active_voxels"], 900)
+        values, lo, world_from_index, meta = chlorovdb.read_grid(out)
+        self.assertEqual(meta["unit"], "uM")
+        self.assertAlmostEqual(float(values.max()), 5.0, places=4)
+        self.assertAlmostEqual(float(values.sum()) * 1e-9, 5.0 * 1e-6, delta=0.1e-6)
+        with self.assertRaises(chlorovdb.InputError):
+            chlorovdb.voxelize_mesh(vertices, triangles, self.dir / "x.vdb", voxel_size=0.001, mode="bogus")
+        with self.assertRaises(chlorovdb.InputError):
+            chlorovdb.voxelize_mesh(vertices, triangles + 100, self.dir / "x.vdb", voxel_size=0.001)
+        with self.assertRaises(chlorovdb.InputError):  # the memory estimate refuses 1e18 voxels
+            chlorovdb.voxelize_mesh(vertices * 100, triangles, self.dir / "x.vdb", voxel_size=1e-6)
+
+
+if __name__ == "__main__":
+    unittest.main()
