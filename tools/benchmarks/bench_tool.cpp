@@ -30,6 +30,10 @@ struct Row {
   std::string label, layer, clock;
   int spp = 0;
   double seconds = 0, budget = 0, mse = 0, rmse = 0, rel_mse = 0, bias = 0, efficiency = 0;
+  double reference_mean = 0;
+  // Mean bias relative to the reference's mean: about 0 (within noise) for an
+  // unbiased estimator; -1 means the variant renders nothing of this layer.
+  double relative_bias() const { return reference_mean != 0 ? bias / reference_mean : 0.0; }
 };
 
 // Columns by name (converge's header), so the CSV can grow. `seconds` is the
@@ -68,6 +72,7 @@ std::vector<Row> read_rows(const std::vector<std::string>& files, const std::str
       r.rel_mse = std::stod(c[col["rel_mse"]]);
       r.bias = std::stod(c[col["bias"]]);
       r.efficiency = std::stod(c[col["efficiency"]]);
+      if (col.count("reference_mean")) r.reference_mean = std::stod(c[col["reference_mean"]]);
       rows.push_back(r);
     }
   }
@@ -109,13 +114,14 @@ int table(const std::vector<std::string>& files, const std::string& layer, const
   }
   const double base = last.count(baseline) ? last[baseline].efficiency : 0.0;
   const std::string clock = rows.empty() ? "wall" : rows.front().clock;
-  fmt::print("| variant | spp | {} time (s) | RMSE | relMSE | efficiency 1/(MSE·s) | vs {} |\n", clock == "cpu" ? "CPU" : "wall",
-             baseline);
-  fmt::print("| --- | ---: | ---: | ---: | ---: | ---: | ---: |\n");
+  fmt::print("| variant | spp | {} time (s) | RMSE | relMSE | mean bias | efficiency 1/(MSE·s) | vs {} |\n",
+             clock == "cpu" ? "CPU" : "wall", baseline);
+  fmt::print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
   for (const std::string& label : labels) {
     const Row& r = last[label];
-    fmt::print("| {} | {} | {:.2f} | {:.3e} | {:.3e} | {:.3e} | {} |\n", label, r.spp, r.seconds, r.rmse, r.rel_mse,
-               r.efficiency, base > 0 ? fmt::format("{:.2f}×", r.efficiency / base) : "–");
+    fmt::print("| {} | {} | {:.2f} | {:.3e} | {:.3e} | {:+.1f} % | {:.3e} | {} |\n", label, r.spp, r.seconds, r.rmse,
+               r.rel_mse, 100 * r.relative_bias(), r.efficiency,
+               base > 0 ? fmt::format("{:.2f}×", r.efficiency / base) : "–");
   }
   return 0;
 }
@@ -132,7 +138,9 @@ int best(const std::vector<std::string>& files, const std::string& layer, const 
     if (!candidates.empty() && std::find(candidates.begin(), candidates.end(), label) == candidates.end()) continue;
     if (top.empty() || r.efficiency > last[top].efficiency) top = label;
   }
-  fmt::print("{} {:.2f}\n", top, last[top].efficiency / last[baseline].efficiency);
+  // LABEL GAIN BIAS_OF_LABEL BIAS_OF_BASELINE (relative mean biases, per cent)
+  fmt::print("{} {:.2f} {:+.1f} {:+.1f}\n", top, last[top].efficiency / last[baseline].efficiency,
+             100 * last[top].relative_bias(), 100 * last[baseline].relative_bias());
   return 0;
 }
 
