@@ -1,5 +1,6 @@
 #include "analysis/pbrt_export.h"
 
+#include <algorithm>
 #include <cmath>
 #include <map>
 #include <set>
@@ -28,8 +29,12 @@ std::string vec(const Vec3& v) { return fmt::format("{} {} {}", num(v.x), num(v.
 // outside the table), two points for a constant, 1 nm steps otherwise.
 template <class F>
 std::string sampled_pairs(F&& f) {
+  std::vector<double> v;
+  for (int l = int(kLambdaMin); l <= int(kLambdaMax); ++l) v.push_back(f(float(l)));
+  if (std::all_of(v.begin(), v.end(), [&](double x) { return x == v.front(); }))  // flat: two points say it
+    return fmt::format("[{} {} {} {}]", int(kLambdaMin), num(v.front()), int(kLambdaMax), num(v.front()));
   std::string s = "[";
-  for (int l = int(kLambdaMin); l <= int(kLambdaMax); ++l) s += fmt::format("{}{} {}", l == int(kLambdaMin) ? "" : " ", l, num(f(float(l))));
+  for (size_t i = 0; i < v.size(); ++i) s += fmt::format("{}{} {}", i ? " " : "", int(kLambdaMin) + int(i), num(v[i]));
   return s + "]";
 }
 
