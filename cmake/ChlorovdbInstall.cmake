@@ -20,8 +20,10 @@ set(CHLOROVDB_INSTALL_CMAKEDIR "${CMAKE_INSTALL_LIBDIR}/cmake/chlorovdb" CACHE S
     "Where chlorovdbConfig.cmake is installed, relative to the prefix")
 set(CHLOROVDB_INSTALL_SPECTRADIR "${CMAKE_INSTALL_DATADIR}/chlorovdb/spectra")
 
+# Every module library: chlorovdb_<folder> for each src/<folder> that defines one.
+file(GLOB _module_dirs LIST_DIRECTORIES true RELATIVE ${PROJECT_SOURCE_DIR}/src ${PROJECT_SOURCE_DIR}/src/*)
 set(_chlorovdb_exported)
-foreach(_m core spectra io film geometry materials lights camera grids voxelize media tracking fluorescence scene integrator)
+foreach(_m ${_module_dirs})
   set(_t chlorovdb_${_m})
   if(NOT TARGET ${_t})
     continue()
