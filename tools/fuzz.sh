@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Fuzz the scene loader and the spectrum CSV reader with libFuzzer (issue 7).
 #
-#   tools/fuzz.sh [--seconds N] [--target scene|csv|all] [--jobs J] [--build-dir DIR] [--no-build]
+#   tools/fuzz.sh [--seconds N] [--target scene|csv|all] [--jobs J] [--keep-going] [--build-dir DIR] [--no-build]
 #
 # Configures a clang build with ASan + UBSan and -DCHLOROVDB_FUZZ=ON in DIR
 # (default build-fuzz), builds only the fuzz targets, then runs each target for
@@ -10,8 +10,8 @@
 # DIR/fuzz/corpus/<target> and survive between runs. A crash, sanitizer report,
 # unexpected exception or hang (> 10 s on one input) stops the target; its input
 # is copied to fuzz/crashes/ and the script exits non-zero.
-# With --jobs J > 1, libFuzzer's fork mode runs J workers and keeps going past
-# crashes (all of them land in the artifacts folder).
+# With --jobs J > 1 or --keep-going, libFuzzer's fork mode runs J workers (default 1)
+# and keeps going past findings (each lands in the artifacts folder and fuzz/crashes/).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -20,6 +20,7 @@ target=all
 jobs=1
 build_dir=build-fuzz
 build=1
+keep_going=0
 while [ $# -gt 0 ]; do
   case "$1" in
     --seconds) seconds=$2; shift 2 ;;
@@ -27,6 +28,7 @@ while [ $# -gt 0 ]; do
     --jobs) jobs=$2; shift 2 ;;
     --build-dir) build_dir=$2; shift 2 ;;
     --no-build) build=0; shift ;;
+    --keep-going) keep_going=1; shift ;;
     -h|--help) sed -n '2,16p' "$0"; exit 0 ;;
     *) echo "fuzz.sh: unknown argument $1 (see --help)" >&2; exit 2 ;;
   esac
@@ -62,7 +64,9 @@ for t in "${targets[@]}"; do
   seeds=("fuzz/seeds/$t")
   [ "$t" = scene ] && seeds+=(scenes)
   fork=()
-  [ "$jobs" -gt 1 ] && fork=(-fork="$jobs" -ignore_crashes=1 -ignore_timeouts=1 -ignore_ooms=1)
+  if [ "$jobs" -gt 1 ] || [ "$keep_going" = 1 ]; then
+    fork=(-fork="$jobs" -ignore_crashes=1 -ignore_timeouts=1 -ignore_ooms=1)
+  fi
   echo "== fuzz_$t: ${seconds} s, corpus $corpus"
   before=$(ls "$artifacts" | wc -l)
   if ! "$build_dir/fuzz/fuzz_$t" -seed=1 -max_total_time="$seconds" -timeout=10 -rss_limit_mb=4096 \
