@@ -1,13 +1,15 @@
 #include "fluorescence/emission_spectrum.h"
 
+#include <algorithm>
 #include <stdexcept>
 #include <vector>
 
 namespace chlorovdb {
 
 Spectrum normalise_emission(const Spectrum& s) {
-  const float total = s.integral(kLambdaMinUV, kLambdaMax);
-  if (!(total > 0.f)) throw std::invalid_argument("emission spectrum integrates to zero over 250-830 nm");
+  // Over the table's whole support, as Pigment validation integrates it.
+  const float total = s.integral(std::min(kLambdaMinUV, s.support_min()), std::max(kLambdaMax, s.support_max()));
+  if (!(total > 0.f)) throw std::invalid_argument("emission spectrum integrates to zero");
   return s.scaled(1.f / total);
 }
 

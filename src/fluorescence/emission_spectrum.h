@@ -7,7 +7,7 @@
 
 namespace chlorovdb {
 
-// Rescales `s` so that its integral over [kLambdaMinUV, kLambdaMax] is 1.
+// Rescales `s` so that its integral over its support (at least 250–830 nm) is 1.
 // Throws std::invalid_argument when the integral is zero.
 Spectrum normalise_emission(const Spectrum& s);
 

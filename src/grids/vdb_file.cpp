@@ -164,7 +164,17 @@ void write_concentration_grids(const std::filesystem::path& path, std::span<cons
     auto grid = openvdb::FloatGrid::create(d.background);
     grid->setName(d.metadata.name);
     grid->setGridClass(openvdb::GRID_FOG_VOLUME);
-    grid->setTransform(openvdb::math::Transform::createLinearTransform(to_vdb(d.world_from_index.matrix())));
+    try {
+      grid->setTransform(openvdb::math::Transform::createLinearTransform(to_vdb(d.world_from_index.matrix())));
+    } catch (const openvdb::Exception& e) {
+      // OpenVDB refuses nearly singular maps, i.e. voxels of about 1e-5 world units or less.
+      const Vec3 voxel{length(d.world_from_index.vector({1, 0, 0})), length(d.world_from_index.vector({0, 1, 0})),
+                       length(d.world_from_index.vector({0, 0, 1}))};
+      throw InputError(path.string(), d.metadata.name, fmt::format("voxel size {} x {} x {}", voxel.x, voxel.y, voxel.z),
+                       fmt::format("OpenVDB cannot store this transform ({}); express the grid in a smaller length "
+                                   "unit (e.g. micrometres) and set the scene's length_unit",
+                                   e.what()));
+    }
     auto acc = grid->getAccessor();
     for (int z = 0; z < d.dims[2]; ++z)
       for (int y = 0; y < d.dims[1]; ++y)

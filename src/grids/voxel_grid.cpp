@@ -42,6 +42,15 @@ VoxelGrid VoxelGrid::from_bricks(Coord index_lo, Coord index_hi, float backgroun
     throw InputError(file, "grid", metadata.name,
                      fmt::format("background value {} is not a finite non-negative number", background));
 
+  // Lookups run in float index space, exact to one voxel only within ±2^24.
+  constexpr int kMaxIndex = 1 << 24;
+  for (int a = 0; a < 3; ++a)
+    if (index_lo[a] < -kMaxIndex || index_hi[a] > kMaxIndex)
+      throw InputError(file, "grid", metadata.name,
+                       fmt::format("voxel indices [{}, {}] on axis {} exceed ±2^24: float lookups there would be off "
+                                   "by whole voxels; re-centre the grid's index space",
+                                   index_lo[a], index_hi[a], a));
+
   VoxelGrid g;
   g.index_lo_ = index_lo;
   g.index_hi_ = index_hi;

@@ -96,6 +96,11 @@ class VoxelGrid {
   std::pair<float, float> min_max(Coord lo, Coord hi) const;
 
   const Transform& world_from_index() const { return world_from_index_; }
+  // Places the same voxels elsewhere in the world (a scene's length unit).
+  void set_world_from_index(const Transform& world_from_index) {
+    world_from_index_ = world_from_index;
+    index_from_world_ = world_from_index.inverse();
+  }
   const Transform& index_from_world() const { return index_from_world_; }
   // Voxels that may differ from the background (inclusive).
   Coord index_lo() const { return index_lo_; }

@@ -8,10 +8,17 @@ namespace chlorovdb {
 
 namespace {
 
-// Full mode continues an excitation path with this probability (Russian
-// roulette, unbiased); nesting is also capped so no path can recurse without
-// bound (reaching the cap has probability ≤ 0.5^8 ≈ 0.4 %, times Q^8).
-constexpr float kContinuationProbability = 0.5f;
+// Full mode continues an excitation path at an event with probability
+//   P = 0.5^(depth + 1) / (1 + k)^2,
+// depth the nesting level and k the continuations this path already spawned.
+// Each coin is weighted by its own P (unbiased: k depends only on earlier
+// coins). A fixed P made scattering media a supercritical branching process
+// (every one of ~30 segments of a τ = 30 path spawning sub-paths that spawn
+// again); with this P a path's expected offspring stays below 0.82 · 0.5^depth.
+// Nesting is also capped at 8 so no recursion is unbounded.
+float continuation_probability(int depth, int spawned) {
+  return std::ldexp(1.f, -(depth + 1)) / float((1 + spawned) * (1 + spawned));
+}
 constexpr int kMaxContinuationDepth = 8;
 // Share of continuation wavelengths drawn uniformly over 250–830 nm so the pdf
 // is positive wherever re-emitted fluorescence can be reabsorbed.
@@ -93,7 +100,7 @@ float direct_excitation(const Scene& scene, const FluorescentPigment& fp, const 
 // Same quantity for the fluence that did not come straight from a light:
 // an excitation path at λ'' in a uniformly sampled direction.
 float indirect_excitation(const Scene& scene, const FluorescentPigment& fp, const Vec3& x, int medium, float c,
-                          Rng& rng, PathStats& stats, int depth, float* lambda_excitation) {
+                          Rng& rng, PathStats& stats, int depth, float p_continue, float* lambda_excitation) {
   const float range = kLambdaMax - kLambdaMinUV;
   const float light_share = fp.lights.empty() ? 0.f : 1.f - kUniformWavelengthShare;
   float lp;
@@ -119,14 +126,15 @@ float indirect_excitation(const Scene& scene, const FluorescentPigment& fp, cons
   options.fluorescence_depth = depth + 1;
   const PathRadiance sub = trace_path_from(scene, Ray{x, w}, medium, wl, rng, stats, options);
   const float radiance = sub.fluorescence[0] + sub.other[0];
-  const float fluence = radiance / (uniform_sphere_pdf() * pdf_lambda * kContinuationProbability);
+  const float fluence = radiance / (uniform_sphere_pdf() * pdf_lambda * p_continue);
   return lp * kAbsorptionPerMolarExtinction * eps * c * fluence;
 }
 
 }  // namespace
 
 SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, float t_end, int medium,
-                                            PreparedMedia& media, Rng& rng, PathStats& stats, int depth) {
+                                            PreparedMedia& media, Rng& rng, PathStats& stats, int depth,
+                                            int* continuations) {
   const auto& pigments = scene.fluorescence[medium];
   const SampledWavelengths& lambda = media.lambda();
   const int n = lambda.count();
@@ -169,10 +177,13 @@ SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, 
   float lp = 0.f;
   const float direct = direct_excitation(scene, fp, x, medium, c, rng, stats, &lp);
   add_emission(direct, lp);
-  if (scene.settings.fluorescence == FluorescenceMode::full && depth < kMaxContinuationDepth &&
-      rng.uniform() < kContinuationProbability) {
-    const float indirect = indirect_excitation(scene, fp, x, medium, c, rng, stats, depth, &lp);
-    add_emission(indirect, lp);
+  if (scene.settings.fluorescence == FluorescenceMode::full && depth < kMaxContinuationDepth) {
+    const float p_continue = continuation_probability(depth, *continuations);
+    if (rng.uniform() < p_continue) {
+      ++*continuations;
+      const float indirect = indirect_excitation(scene, fp, x, medium, c, rng, stats, depth, p_continue, &lp);
+      add_emission(indirect, lp);
+    }
   }
 
   return T * j / (ds.pdf * p_pigment);

@@ -10,9 +10,12 @@ namespace chlorovdb {
 // one point t on the segment, T by the scene's transmittance estimator, and
 // j from one excitation sample (light, point on it, λ' ∝ S·ε·λ') that serves
 // all carried wavelengths. In `full` mode an excitation continuation at λ'
-// adds the fluence that scattered, reflected, refracted or was re-emitted.
+// adds the fluence that scattered, reflected, refracted or was re-emitted;
+// `continuations` counts those the calling path has spawned (it lowers the
+// chance of spawning more, keeping the branching bounded).
 SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, float t_end, int medium,
-                                            PreparedMedia& media, Rng& rng, PathStats& stats, int depth);
+                                            PreparedMedia& media, Rng& rng, PathStats& stats, int depth,
+                                            int* continuations);
 
 // The thesis's estimator (PHYSICS.md §5), kept to measure its bias and cost:
 // called when the hero wavelength is absorbed at `p`; with probability Q it

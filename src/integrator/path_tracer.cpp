@@ -60,6 +60,7 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
   bool count_emitters = !options.skip_emitters_on_first_segment;
   float eta_scale = 1.f;
   int depth = 0;
+  int continuations = 0;  // excitation continuations this path spawned (full mode)
   ScatterVertex prev{{ray.o, medium, nullptr}, Vec3{}};
   // Where the current segment really starts. A ray spawned off a surface begins
   // a float-error offset beyond it; the fluorescence integral must not skip that
@@ -94,7 +95,8 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
         const SampledSpectrum weight = beta / r_u.average(n);
         const float gap = std::max(0.f, dot(ray.o - segment_start, ray.d));
         L.fluorescence += weight * estimate_fluorescence_along(scene, Ray{ray.o - ray.d * gap, ray.d}, t_end + gap,
-                                                               medium, media, rng, stats, options.fluorescence_depth);
+                                                               medium, media, rng, stats, options.fluorescence_depth,
+                                                               &continuations);
       }
 
       if (scene.track_by_transmittance(medium)) {

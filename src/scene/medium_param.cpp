@@ -40,7 +40,7 @@ Spectrum read_emission(ParamReader& p, const Spectrum& epsilon, float quantum_yi
 }
 
 // A concentration or coefficient: a number, or {"file", "name", "scale", "unit"}.
-Field read_field(ParamReader& p, const std::string& key, bool concentration, GridCache& grids) {
+Field read_field(ParamReader& p, const std::string& key, bool concentration, GridCache& grids, float unit) {
   const nlohmann::json& v = p.raw(key);
   if (v.is_number()) {
     const float value = p.require_float(key, 0.f);
@@ -55,7 +55,12 @@ Field read_field(ParamReader& p, const std::string& key, bool concentration, Gri
   GridLoadOptions options;
   options.clamp_invalid = g.get_bool("clamp_invalid", false);
   auto& grid = grids[{file.string(), name}];
-  if (!grid) grid = std::make_shared<const VoxelGrid>(load_concentration_grid(file, name, options));
+  if (!grid) {
+    VoxelGrid g = load_concentration_grid(file, name, options);
+    // A grid's world units are the scene's (voxelize writes the mesh's own units).
+    if (unit != 1.f) g.set_world_from_index(Transform::scale(Vec3(unit)) * g.world_from_index());
+    grid = std::make_shared<const VoxelGrid>(std::move(g));
+  }
   float to_internal = 1.f;
   if (concentration) {
     // Unit: the scene's word, else the grid's own metadata, else µM (the literature's unit).
@@ -86,7 +91,7 @@ PigmentTable read_pigments(ParamReader& top) {
   return table;
 }
 
-MediumDefinition read_medium(ParamReader& m, const PigmentTable& pigments, GridCache& grids) {
+MediumDefinition read_medium(ParamReader& m, const PigmentTable& pigments, GridCache& grids, float unit) {
   MediumDesc desc;
   desc.where = fmt::format("{}: {}", m.file().string(), m.key_path(""));
   // Solvent.
@@ -116,7 +121,7 @@ MediumDefinition read_medium(ParamReader& m, const PigmentTable& pigments, GridC
                                         near.empty() ? "" : fmt::format(" (did you mean \"{}\"?)", near)));
     }
     if (entry.has("concentration") == entry.has("grid")) entry.fail("", "give either \"concentration\" or \"grid\"");
-    PigmentInMedium pm{it->second.pigment, read_field(entry, entry.has("grid") ? "grid" : "concentration", true, grids)};
+    PigmentInMedium pm{it->second.pigment, read_field(entry, entry.has("grid") ? "grid" : "concentration", true, grids, unit)};
     entry.finish();
     if (int(desc.pigments.size()) == kMaxPigments)
       entry.fail("pigment", fmt::format("a medium holds at most {} pigments", kMaxPigments));
@@ -133,7 +138,7 @@ MediumDefinition read_medium(ParamReader& m, const PigmentTable& pigments, GridC
   }
   // Particle scattering.
   if (auto s = m.optional_child("scattering")) {
-    desc.particle_sigma_s = read_field(*s, "coefficient", false, grids);
+    desc.particle_sigma_s = read_field(*s, "coefficient", false, grids, unit);
     desc.particle_phase = HenyeyGreenstein{s->get_float("g", 0.f, -0.999f, 0.999f)};
     s->finish();
   }

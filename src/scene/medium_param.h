@@ -27,7 +27,8 @@ struct MediumDefinition {
   Medium medium;
   std::vector<FluorescentPigment> fluorescent;  // its pigments with Q > 0 (lights filled in later)
 };
-MediumDefinition read_medium(ParamReader& params, const PigmentTable& pigments, GridCache& grids);
+// `unit`: the scene's length unit in metres; grid transforms are in that unit.
+MediumDefinition read_medium(ParamReader& params, const PigmentTable& pigments, GridCache& grids, float unit);
 
 // True when anything in the medium scatters (molecules or particles).
 bool can_scatter(const Medium& medium);

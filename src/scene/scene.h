@@ -97,7 +97,11 @@ struct Scene {
   int camera_medium = -1;
 
   // Absorbing-only media need no collision sampling: transmittance is a weight.
-  bool track_by_transmittance(int medium) const { return settings.skip_unneeded_work && !medium_scatters[medium]; }
+  // Not for the reference estimator, whose fluorescence events are absorptions.
+  bool track_by_transmittance(int medium) const {
+    return settings.skip_unneeded_work && !medium_scatters[medium] &&
+           !(settings.fluorescence == FluorescenceMode::reference && !fluorescence[medium].empty());
+  }
 
   bool has_fluorescence() const {
     for (const auto& f : fluorescence)

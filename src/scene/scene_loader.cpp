@@ -205,6 +205,13 @@ Light read_light(ParamReader& l, float unit) {
     if (!(Y > 0.f)) l.fail("normalize", "the spectrum has no luminance (it emits nothing visible)");
     spectrum = spectrum.scaled(1.f / Y);
   }
+  // Radiance is carried in single precision; path weights divide by small
+  // densities (up to ~1e15 here), so emission beyond ~1e20 would overflow.
+  constexpr float kMaxEmission = 1e20f;
+  if (scale * spectrum.max_value() > kMaxEmission)
+    l.fail("scale", fmt::format("emission up to {:.3g} would overflow single-precision radiance (limit {:.0e}); only "
+                                "ratios between lights matter, so scale them all down",
+                                scale * spectrum.max_value(), kMaxEmission));
   Light light = PointLight{};
   if (type == "point") {
     light = PointLight{l.require_vec3("position") * unit, spectrum, scale};
@@ -224,6 +231,23 @@ Light read_light(ParamReader& l, float unit) {
   }
   l.finish();
   return light;
+}
+
+// Light-selection weight: emitted power (times `share`), computed at unit scale
+// and multiplied in double, so scales from 1e-30 to 1e30 neither overflow nor
+// vanish; only ratios matter, so the weights are rescaled to a maximum of 1.
+double light_power(const Light& light, const GeometryScene& geometry) {
+  Light unit_scale = light;
+  std::visit([](auto& l) { l.scale = 1.f; }, unit_scale);
+  return double(phi_power(unit_scale, geometry)) * light_scale(light);
+}
+
+std::vector<float> relative_weights(const std::vector<double>& w) {
+  double max = 0;
+  for (double x : w) max = std::max(max, std::isfinite(x) ? x : 0.0);
+  std::vector<float> r(w.size(), 0.f);
+  for (size_t i = 0; i < w.size(); ++i) r[i] = max > 0 && std::isfinite(w[i]) ? float(w[i] / max) : 0.f;
+  return r;
 }
 
 // Does any fluorescent pigment of the scene emit where `absorber` absorbs?
@@ -256,22 +280,22 @@ std::string why_direct_is_not_exact(const Scene& scene) {
 void setup_fluorescence(Scene& scene, const std::string& mode) {
   for (size_t m = 0; m < scene.media.size(); ++m) {
     for (FluorescentPigment& fp : scene.fluorescence[m]) {
-      std::vector<float> weights;
+      std::vector<double> weights;
       const bool skip = scene.settings.skip_unneeded_work;
       for (size_t l = 0; l < scene.lights.size(); ++l) {
         const Light& light = scene.lights[l];
         ExcitationSampler es(emission_spectrum(light), fp.epsilon);
         // Weight: the light's power times the share of its spectrum the pigment
         // can absorb, so lights dark in the excitation band are never picked.
-        const float total = emission_spectrum(light).integral(kLambdaMinUV, kLambdaMax);
-        const float in_band = skip ? es.total() / std::max(1e-30f, total) : 1.f;
-        const float w = phi_power(light, scene.geometry) * in_band;
-        if (!(w > 0.f)) continue;
+        const double total = emission_spectrum(light).integral(kLambdaMinUV, kLambdaMax);
+        const double in_band = skip ? es.total() / std::max(1e-300, total) : 1.0;
+        const double w = light_power(light, scene.geometry) * in_band;
+        if (!(w > 0.0)) continue;
         fp.lights.push_back(int(l));
         fp.excitation.push_back(std::move(es));
         weights.push_back(w);
       }
-      if (!fp.lights.empty()) fp.light_sampler = LightSampler(fp.lights, weights);
+      if (!fp.lights.empty()) fp.light_sampler = LightSampler(fp.lights, relative_weights(weights));
     }
   }
   RenderSettings& s = scene.settings;
@@ -320,7 +344,7 @@ Scene load_scene(const std::filesystem::path& file, const SceneOverrides& overri
   NameTable media;
   GridCache grids;
   for (auto& [name, m] : top.children_map("media")) {
-    MediumDefinition def = read_medium(m, pigments, grids);
+    MediumDefinition def = read_medium(m, pigments, grids, unit);
     media.add(name, int(scene.media.size()));
     scene.media.push_back(std::move(def.medium));
     scene.medium_names.push_back(name);
@@ -359,7 +383,7 @@ Scene load_scene(const std::filesystem::path& file, const SceneOverrides& overri
       medium_bounded[b.medium_inside] = true;
     }
     if (auto e = sh.optional_child("emission")) {
-      AreaLight light{id, read_spectrum(*e, "spectrum", named_spectrum("D65")), e->get_float("scale", 1.f, 0.f),
+      AreaLight light{id, read_spectrum(*e, "spectrum", named_spectrum("D65")), e->get_float("scale", 1.f, 0.f, 1e20f),
                       e->get_bool("two_sided", false)};
       e->finish();
       b.area_light = int(scene.lights.size());
@@ -393,7 +417,9 @@ Scene load_scene(const std::filesystem::path& file, const SceneOverrides& overri
     preprocess(scene.lights[l], bounds);
     if (std::holds_alternative<EnvironmentLight>(scene.lights[l])) scene.infinite_lights.push_back(int(l));
   }
-  scene.light_sampler = LightSampler::power(scene.lights, scene.geometry);
+  std::vector<double> power;
+  for (const Light& light : scene.lights) power.push_back(light_power(light, scene.geometry));
+  scene.light_sampler = LightSampler(relative_weights(power));
   setup_fluorescence(scene, fluorescence_mode);
   return scene;
 }
