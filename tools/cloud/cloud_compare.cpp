@@ -9,6 +9,7 @@
 //   mse                  its square
 //   mean_ours, mean_ref  mean pixel value (all channels)
 //   rel_diff_means       mean_ours / mean_ref - 1 (the bias measure: noise averages out)
+//   rel_diff_means_sigma its standard error from our noise (>= 2 files; REF's is ~16x smaller)
 //   rel_diff_r/g/b       the same per channel
 //   mean_abs_rel_diff    mean over values of |ours - ref| / ref (noise dominated)
 //   noise_mse_ours       the average's own noise: per-value sample variance over the
@@ -126,6 +127,7 @@ int main(int argc, char** argv) {
   const size_t n = ref.size();
   const int k = int(files.size()) - 1;
   std::vector<double> sum(n, 0.0), sum2(n, 0.0);
+  std::vector<double> pixel_sums(size_t(k) * (n / 3), 0.0);  // per file, per pixel: R + G + B
   double time_s = 0, spp = 0;
   for (int f = 1; f <= k; ++f) {
     const Image img = chlorovdb::read_exr(files[f]);
@@ -139,6 +141,7 @@ int main(int argc, char** argv) {
     for (size_t i = 0; i < n; ++i) {
       sum[i] += v[i];
       sum2[i] += double(v[i]) * v[i];
+      pixel_sums[size_t(f - 1) * (n / 3) + i / 3] += v[i];
     }
     time_s += meta_number(img, "wall_time_s");
     spp += meta_number(img, "spp");
@@ -148,6 +151,20 @@ int main(int argc, char** argv) {
     ours[i] = sum[i] / k;
     if (k >= 2) noise_var[i] = std::max(0.0, (sum2[i] - k * ours[i] * ours[i]) / (k - 1)) / k;
   }
+  // Variance of the average image's mean: pixels are independent, a pixel's channels are not.
+  double mean_var = 0;
+  if (k >= 2)
+    for (size_t p = 0; p < n / 3; ++p) {
+      double s = 0, s2 = 0;
+      for (int f = 0; f < k; ++f) {
+        const double v = pixel_sums[size_t(f) * (n / 3) + p];
+        s += v;
+        s2 += v * v;
+      }
+      const double m = s / k;
+      mean_var += std::max(0.0, (s2 - k * m * m) / (k - 1)) / k;
+    }
+  mean_var /= double(n) * double(n);
 
   if (!dump.empty()) {
     std::vector<float> o(ours.begin(), ours.end());
@@ -186,6 +203,7 @@ int main(int argc, char** argv) {
   std::printf("mean_ours %.6f\n", so / n);
   std::printf("mean_ref %.6f\n", sr / n);
   std::printf("rel_diff_means %+.5f\n", so / sr - 1);
+  if (k >= 2) std::printf("rel_diff_means_sigma %.5f\n", std::sqrt(mean_var) / (sr / n));
   const char* names = "rgb";
   for (int c = 0; c < 3; ++c) std::printf("rel_diff_%c %+.5f\n", names[c], ch_o[c] / ch_r[c] - 1);
   std::printf("mean_abs_rel_diff %.5f\n", sard / n);
