@@ -1,5 +1,7 @@
 #include "film/film.h"
 
+#include "core/memory.h"
+
 #include <fmt/format.h>
 
 #include <algorithm>
@@ -28,6 +30,9 @@ Film::Film(int width, int height, std::vector<std::string> layer_names, ColorSpa
   if (width <= 0 || height <= 0 || layer_names_.empty())
     throw std::invalid_argument(fmt::format("Film: needs a positive size and at least one layer ({}x{}, {} layers)", width,
                                             height, layer_names_.size()));
+  // Render holds a second, per-pass film of the same size: refuse before allocating.
+  check_memory(2.0 * width * height * layer_names_.size() * 3 * sizeof(double), "the film's sums", "film",
+               "resolution", fmt::format("{}x{}", width, height));
   cie_y_integral();  // load the colour-matching functions now: a missing table fails at setup, not mid-render
   xyz_.assign(layer_names_.size(), std::vector<double>(size_t(width) * size_t(height) * 3, 0.0));
 }
@@ -59,6 +64,8 @@ Film& Film::operator=(Film&& o) noexcept {
 }
 
 void Film::enable_spectral(float lambda_min_nm, float lambda_max_nm, int bins) {
+  check_memory(2.0 * width_ * height_ * std::max(bins, 0) * sizeof(double), "the spectral bins", "film",
+               "spectral_bins", std::to_string(bins));
   if (!(lambda_max_nm > lambda_min_nm) || !std::isfinite(lambda_min_nm) || !std::isfinite(lambda_max_nm) || bins < 1)
     throw std::invalid_argument(
         fmt::format("Film: spectral bins need lambda_min < lambda_max and bins >= 1 ({}, {}, {})", lambda_min_nm, lambda_max_nm, bins));

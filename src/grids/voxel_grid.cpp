@@ -1,5 +1,7 @@
 #include "grids/voxel_grid.h"
 
+#include "core/memory.h"
+
 #include <algorithm>
 #include <atomic>
 #include <cstring>
@@ -42,15 +44,6 @@ VoxelGrid VoxelGrid::from_bricks(Coord index_lo, Coord index_hi, float backgroun
     throw InputError(file, "grid", metadata.name,
                      fmt::format("background value {} is not a finite non-negative number", background));
 
-  // Lookups run in float index space, exact to one voxel only within ±2^24.
-  constexpr int kMaxIndex = 1 << 24;
-  for (int a = 0; a < 3; ++a)
-    if (index_lo[a] < -kMaxIndex || index_hi[a] > kMaxIndex)
-      throw InputError(file, "grid", metadata.name,
-                       fmt::format("voxel indices [{}, {}] on axis {} exceed ±2^24: float lookups there would be off "
-                                   "by whole voxels; re-centre the grid's index space",
-                                   index_lo[a], index_hi[a], a));
-
   VoxelGrid g;
   g.index_lo_ = index_lo;
   g.index_hi_ = index_hi;
@@ -59,6 +52,25 @@ VoxelGrid VoxelGrid::from_bricks(Coord index_lo, Coord index_hi, float backgroun
   g.index_from_world_ = world_from_index.inverse();
   g.metadata_ = std::move(metadata);
   const bool empty = index_lo[0] > index_hi[0] || index_lo[1] > index_hi[1] || index_lo[2] > index_hi[2];
+  if (!empty) {
+    // The brick table covers the whole bounding box, however sparse: refuse
+    // one the machine cannot hold before allocating (computed in double: the
+    // count can exceed any integer type).
+    double table_bytes = sizeof(uint32_t);
+    for (int a = 0; a < 3; ++a) table_bytes *= (double(index_hi[a]) - double(index_lo[a]) + 3.0) / 8.0 + 1.0;
+    check_memory(table_bytes, fmt::format("the brick table of a {}x{}x{}-voxel bounding box",
+                                          int64_t(index_hi[0]) - index_lo[0] + 1, int64_t(index_hi[1]) - index_lo[1] + 1,
+                                          int64_t(index_hi[2]) - index_lo[2] + 1),
+                 file, "grid", g.metadata_.name);
+    // Lookups run in float index space, exact to one voxel only within ±2^24.
+    constexpr int kMaxIndex = 1 << 24;
+    for (int a = 0; a < 3; ++a)
+      if (index_lo[a] < -kMaxIndex || index_hi[a] > kMaxIndex)
+        throw InputError(file, "grid", g.metadata_.name,
+                         fmt::format("voxel indices [{}, {}] on axis {} exceed ±2^24: float lookups there would be "
+                                     "off by whole voxels; re-centre the grid's index space",
+                                     index_lo[a], index_hi[a], a));
+  }
   for (int a = 0; a < 3; ++a) {
     // A trilinear stencil starting at lo - 1 already reads voxel lo, and one
     // ending at hi + 1 still reads voxel hi: the bricks cover [lo - 1, hi + 1].

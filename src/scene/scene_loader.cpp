@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "core/memory.h"
 #include "fluorescence/emission_spectrum.h"
 #include "scene/medium_param.h"
 #include "scene/param_reader.h"
@@ -82,6 +83,11 @@ RenderSettings read_render_settings(ParamReader& top, const SceneOverrides& o, s
     *transmittance = "auto";
     *fluorescence = "auto";
   }
+  // Film: 3 layers × XYZ doubles plus the spectral bins, twice (a per-pass film).
+  const auto refuse_huge_film = [&](int w, int h) {
+    check_memory(2.0 * w * h * (3 * 3 + s.spectral_bins) * 8.0, "the image (resolution and spectral bins)",
+                 top.file().string(), "render.resolution", fmt::format("[{}, {}]", w, h));
+  };
   if (o.width) s.width = *o.width;
   if (o.height) s.height = *o.height;
   if (o.spp) s.spp = *o.spp;
@@ -89,6 +95,7 @@ RenderSettings read_render_settings(ParamReader& top, const SceneOverrides& o, s
   if (o.seed) s.seed = *o.seed;
   if (o.transmittance) check_choice("--transmittance", *transmittance = *o.transmittance, kEstimators);
   if (o.fluorescence) check_choice("--fluorescence", *fluorescence = *o.fluorescence, kFluorescenceModes);
+  refuse_huge_film(s.width, s.height);
   s.transmittance_auto = *transmittance == "auto";
   if (!s.transmittance_auto) s.transmittance = *transmittance_estimator_from_string(*transmittance);
   return s;

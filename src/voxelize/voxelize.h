@@ -46,6 +46,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/memory.h"
 #include "core/transform.h"
 #include "core/vec.h"
 #include "geometry/mesh.h"
@@ -137,7 +138,6 @@ VoxelEstimate estimate_voxels(const TriangleMesh& world_mesh, const VoxelizeOpti
 // available) if the estimate exceeds kMaxVoxels or the memory available.
 void check_estimate(const VoxelEstimate& estimate, const VoxelizeOptions& options);
 // MemAvailable from /proc/meminfo in bytes; 0 if it cannot be read.
-int64_t available_memory_bytes();
 
 // Throws InputError for a voxel size that is not positive and finite, or mode parameters out of range.
 void validate_options(const VoxelizeOptions& options);

@@ -138,18 +138,6 @@ Bounds3 mesh_bounds(const TriangleMesh& mesh) {
 
 }  // namespace detail
 
-int64_t available_memory_bytes() {
-  std::ifstream in("/proc/meminfo");
-  std::string line;
-  while (std::getline(in, line))
-    if (line.rfind("MemAvailable:", 0) == 0) {
-      std::istringstream fields(line.substr(13));
-      int64_t kb = 0;
-      if (fields >> kb) return kb * 1024;
-    }
-  return 0;
-}
-
 VoxelEstimate estimate_voxels(const TriangleMesh& mesh, const VoxelizeOptions& o, const ProfileSampler& profile) {
   const Vec3 h = o.voxel_size;
   const double voxel_volume = double(h.x) * h.y * h.z;
