@@ -72,8 +72,8 @@ void BM_Skip(benchmark::State& state, const std::string& variant, bool skip) {
   render_paths(state, scene, 1);
 }
 #define SKIP_PAIR(name)                                                                        \
-  BENCHMARK_CAPTURE(BM_Skip, name##_skip_on, std::string(#name), true)->Unit(benchmark::kMillisecond); \
-  BENCHMARK_CAPTURE(BM_Skip, name##_skip_off, std::string(#name), false)->Unit(benchmark::kMillisecond);
+  BENCHMARK_CAPTURE(BM_Skip, name##_skip_on, std::string(#name), true)->Unit(benchmark::kMillisecond)->UseRealTime(); \
+  BENCHMARK_CAPTURE(BM_Skip, name##_skip_off, std::string(#name), false)->Unit(benchmark::kMillisecond)->UseRealTime();
 SKIP_PAIR(q0)           // no fluorescent pigment: Q = 0
 SKIP_PAIR(dark_lights)  // lights that cannot excite are never picked
 SKIP_PAIR(absorbing)    // nothing scatters: transmittance instead of delta tracking
