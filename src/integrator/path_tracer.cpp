@@ -157,11 +157,17 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
                 return false;
               }
               // Null collision: continue, weighting every lane by sigma_n / its pdf.
+              // r_u and r_l are both relative to the pdf of what was sampled
+              // (T_maj[0] sigma_n[0]); r_l follows ratio tracking's sigma_maj.
               const SampledSpectrum sigma_n = clamp_zero(sigma_maj - mp.sigma_a - mp.sigma_s);
               const float pdf = T_m[0] * sigma_n[0];
-              beta *= pdf > 0.f ? T_m * sigma_n / pdf : SampledSpectrum(0.f);
-              r_u *= pdf > 0.f ? T_m * sigma_n / pdf : SampledSpectrum(0.f);
-              r_l *= T_m * sigma_maj / (T_m[0] * sigma_maj[0]);
+              if (!(pdf > 0.f)) {
+                terminated = true;
+                return false;
+              }
+              beta *= T_m * sigma_n / pdf;
+              r_u *= T_m * sigma_n / pdf;
+              r_l *= T_m * sigma_maj / pdf;
               return !beta.is_black() && !r_u.is_black();
             });
         if (terminated || beta.is_black() || r_u.is_black()) break;

@@ -3,6 +3,7 @@
 // estimates exactly radiance 1 in expectation, at every wavelength.
 #include <gtest/gtest.h>
 
+#include "grids/vdb_file.h"
 #include "integrator/render.h"
 #include "spectra/color.h"
 #include "test_scenes.h"
@@ -142,4 +143,27 @@ TEST(Skips, AbsorbingOnlyMediumByTransmittanceMatchesDeltaTracking) {
     EXPECT_NEAR(a[k].mean(), b[k].mean(), 4 * std::hypot(a[k].sigma(), b[k].sigma())) << "XYZ component " << k;
     EXPECT_LE(a[k].sigma(), b[k].sigma()) << "XYZ component " << k;
   }
+}
+
+TEST(Furnace, HeterogeneousGridScattererWithNullCollisions) {
+  // A pure scatterer whose density varies (so sigma_t < sigma_maj and null
+  // collisions happen) must vanish in the furnace too: null collisions weight
+  // the MIS ratios r_u and r_l by the same sampled pdf.
+  DenseGrid g({16, 16, 16}, 0.f);
+  for (int z = 0; z < 16; ++z)
+    for (int y = 0; y < 16; ++y)
+      for (int x = 0; x < 16; ++x) g.at(x, y, z) = float((x * 7 + y * 13 + z * 5) % 16) / 15.f;
+  g.world_from_index = Transform::translate(Vec3(-1.f + 1.f / 16)) * Transform::scale(Vec3(2.f / 16));
+  g.metadata.name = "density";
+  const auto vdb = std::filesystem::temp_directory_path() / "chlorovdb_integrator_tests" / "furnace_grid.vdb";
+  std::filesystem::create_directories(vdb.parent_path());
+  write_concentration_grid(vdb, g);
+  const Scene scene = load_scene(write_scene("furnace_grid", R"({
+    "render": {"resolution": [8, 8], "max_depth": 100000, "wavelengths": 8},
+    "camera": {"position": [0, 0, 4], "look_at": [0, 0, 0], "fov": 10},
+    "media": {"cloud": {"solvent": "none", "scattering": {"coefficient": {"file": ")" + vdb.string() + R"(",
+                        "name": "density", "scale": 4}, "g": 0.3}}},
+    "lights": [{"type": "environment", "spectrum": 1}]
+  })"));
+  expect_furnace(scene, 20000);
 }
