@@ -23,7 +23,9 @@
 # redirected to OUT, needs /usr/bin/python3 with numpy), else cloud_to_vdb --generate.
 set -euo pipefail
 
-ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)"
+# CHLOROVDB_ROOT: the source tree (default: this script's); lets a copy of the script run, so
+# editing bench.sh while a benchmark runs cannot change the running instance.
+ROOT="${CHLOROVDB_ROOT:-$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)}"
 SHARED="${CHLOROVDB_SHARED:-$ROOT/../shared}/bench/cloud"
 BUILD="$ROOT/build-bench"
 OUT=""
@@ -136,7 +138,11 @@ fi
 render "$ROOT/scenes/bench/cloud.json" 1 0 "$OUT/startup.exr" --resolution 8x8
 STARTUP="$CPU_S"
 echo "# cloud benchmark: $THREADS threads, seeds {$SEEDS}, medians; $(date -u +%FT%TZ); $CHLOROVDB"
-echo "# source: $(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo '?')$(git -C "$ROOT" diff --quiet HEAD -- src 2>/dev/null || echo ' + uncommitted src/ changes')"
+if [[ "$CHLOROVDB" == "$BUILD/src/cli/chlorovdb" ]]; then
+  echo "# source: $(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo '?')$(git -C "$ROOT" diff --quiet HEAD -- src 2>/dev/null || echo ' + uncommitted src/ changes')"
+else
+  echo "# source: whatever built $CHLOROVDB (given with --chlorovdb)"
+fi
 echo "# load average before: $(cut -d' ' -f1-3 /proc/loadavg) on $(nproc) cores; start-up CPU ${STARTUP} s (subtracted from cpu)"
 printf '%-5s %8s %8s %8s %10s %10s | %s\n' spp wall_s cpu/T_s rmse eff_wall eff_cpu 'pbrt-v4: time rmse efficiency'
 declare -A PBRT=([16]="2.10 0.0531" [64]="8.20 0.0266" [256]="32.9 0.01349")
@@ -189,8 +195,10 @@ if [[ ! -f "$CREF" ]]; then
   echo "# chromatic self-reference: $CHROMA_REF_SPP spp (once, cached in $CREF)"
   render "$ROOT/scenes/bench/cloud_chromatic.json" "$CHROMA_REF_SPP" 9999 "$CREF"
 fi
-echo "# chromatic variant vs its own ${CHROMA_REF_SPP}-spp reference (RMSE includes that reference's noise)"
-printf '%-5s %8s %8s %8s %10s %10s\n' spp wall_s cpu/T_s rmse eff_wall eff_cpu
+echo "# chromatic variant vs its own ${CHROMA_REF_SPP}-spp reference; eff_cpu* removes that reference's"
+echo "# noise, estimated as the first row's MSE x its spp / ${CHROMA_REF_SPP}"
+printf '%-5s %8s %8s %8s %10s %10s %10s\n' spp wall_s cpu/T_s rmse eff_wall eff_cpu 'eff_cpu*'
+REFNOISE=""
 for spp in $SPPS; do
   times="" cpus="" rmses=""
   for seed in $SEEDS; do
@@ -201,6 +209,9 @@ for spp in $SPPS; do
     cpus+=" $(awk -v c="$CPU_S" -v s="$STARTUP" -v n="$THREADS" 'BEGIN { print (c - s) / n }')"
     rmses+=" $(get rmse "$R")"
   done
-  awk -v spp="$spp" -v t="$(median $times)" -v c="$(median $cpus)" -v r="$(median $rmses)" 'BEGIN {
-    printf "%-5s %8.2f %8.2f %8.4f %8.0f/s %8.0f/s\n", spp, t, c, r, 1 / (r * r * t), 1 / (r * r * c) }'
+  r="$(median $rmses)"
+  [[ -n "$REFNOISE" ]] || REFNOISE="$(awk -v r="$r" -v s="$spp" -v n="$CHROMA_REF_SPP" 'BEGIN { print r * r * s / n }')"
+  awk -v spp="$spp" -v t="$(median $times)" -v c="$(median $cpus)" -v r="$r" -v z="$REFNOISE" 'BEGIN {
+    m = r * r - z; e = (m > 0) ? sprintf("%8.0f/s", 1 / (m * c)) : "       -"
+    printf "%-5s %8.2f %8.2f %8.4f %8.0f/s %8.0f/s %s\n", spp, t, c, r, 1 / (r * r * t), 1 / (r * r * c), e }'
 done
