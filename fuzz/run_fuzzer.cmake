@@ -1,6 +1,8 @@
 # cmake -DFUZZER=... -DCORPUS=dir -DSEEDS="dir;dir" -DDICT=file -DSECONDS=n -DMAXLEN=bytes -DARTIFACTS=dir/ -P run_fuzzer.cmake
 # One bounded libFuzzer run: a fixed seed, SECONDS of wall time, 10 s per input
 # at most (a longer one is a hang and fails the run), crashes kept in ARTIFACTS.
+# A fresh scratch corpus each time: the run depends only on the seeds (tools/fuzz.sh keeps its own).
+file(REMOVE_RECURSE ${CORPUS})
 file(MAKE_DIRECTORY ${CORPUS} ${ARTIFACTS})
 set(seed_dirs)
 foreach(dir ${SEEDS})

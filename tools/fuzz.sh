@@ -48,8 +48,7 @@ fi
 if [ "$build" = 1 ]; then
   cmake -S . -B "$build_dir" -G Ninja -DCMAKE_CXX_COMPILER="$cxx" -DCMAKE_BUILD_TYPE=RelWithDebInfo \
     -DCMAKE_CXX_FLAGS_RELWITHDEBINFO="-O1 -gline-tables-only" \
-    -DCHLOROVDB_SANITIZE=ON -DCHLOROVDB_FUZZ=ON -DCHLOROVDB_BUILD_TESTS=ON -DCHLOROVDB_BUILD_BENCHMARKS=OFF \
-    -DCHLOROVDB_FUZZ_SECONDS="$seconds" >/dev/null
+    -DCHLOROVDB_SANITIZE=ON -DCHLOROVDB_FUZZ=ON -DCHLOROVDB_BUILD_TESTS=ON -DCHLOROVDB_BUILD_BENCHMARKS=OFF >/dev/null
   cmake --build "$build_dir" --parallel "$(nproc 2>/dev/null || echo 2)" --target "${targets[@]/#/fuzz_}"
 fi
 
