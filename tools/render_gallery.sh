@@ -3,8 +3,9 @@
 # project's own command, copies the PNGs to docs/gallery/ and writes docs/gallery.md with each image,
 # its command line, sample count and the render time measured here.
 #
-#   tools/render_gallery.sh [--bin CHLOROVDB] [--threads N] [SCENE_NAME ...]
+#   tools/render_gallery.sh [--bin CHLOROVDB] [--threads N] [--md-only] [SCENE_NAME ...]
 #
+# --md-only rewrites docs/gallery.md from the recorded times (out/gallery/times.tsv) without rendering.
 # Defaults: build-scenes/src/cli/chlorovdb (else build/src/cli/chlorovdb), 2 threads, every scene in
 # the list below. Naming scenes re-renders only those and keeps the other entries of docs/gallery.md.
 # Meshes and volumes are regenerated first if missing (tools/make_meshes.py, tools/make_volumes.sh).
@@ -18,11 +19,13 @@ cd "$root"
 bin=""
 threads=2
 only=()
+md_only=0
 while [ $# -gt 0 ]; do
   case "$1" in
     --bin) bin=$2; shift 2 ;;
     --threads) threads=$2; shift 2 ;;
-    -h|--help) sed -n '2,13p' "$0"; exit 0 ;;
+    --md-only) md_only=1; shift ;;
+    -h|--help) sed -n '2,15p' "$0"; exit 0 ;;
     *) only+=("${1%.json}"); shift ;;
   esac
 done
@@ -37,11 +40,11 @@ fi
 scenes=$(cat <<'EOF'
 glass_F2_0.02uM|Fig. 5.4|0.02 µM under F2: clear water in the beaker; no tint, no red.
 glass_F2_1uM|Fig. 5.4|1 µM under F2: a pale yellow-green tint; no red.
-glass_F2_5uM|Figs 5.4, 5.5 (left)|5 µM under F2: light green; no red glow (fluorescence is about 4 % of the red channel in the liquid).
-glass_F2_25uM|Fig. 5.4|25 µM under F2: dark blue-green, the darkest of the series; no red.
-glass_D65_5uM|Fig. 5.5 (right)|5 µM under D65: green (bluer than under the warmer F2), no red glow although D65 reaches into the UV.
+glass_F2_5uM|Figs 5.4, 5.5 (left)|5 µM under F2: light green; no red glow (fluorescence is 1.5 % of the red channel in the liquid).
+glass_F2_25uM|Fig. 5.4|25 µM under F2: dark blue-green, the darkest of the series; no red (fluorescence 7 % of the red channel).
+glass_D65_5uM|Fig. 5.5 (right)|5 µM under D65: blue-green (cooler than under F2); no red glow although D65 reaches into the UV (fluorescence is 4 % of the red channel).
 glass_UVB_5uM_Q0|Fig. 5.6 (left)|5 µM, Q = 0, UVB tube in a dark room: no red at all; the liquid only passes the tube's 546/578 nm mercury lines (green) — not the thesis's violet: the shipped ε absorbs the tube's 405/436 nm lines.
-glass_UVB_5uM_Q0.23|Fig. 5.6 (right)|5 µM, Q = 0.23, same light: the solution glows red-orange (fluorescence plus the green lines).
+glass_UVB_5uM_Q0.23|Fig. 5.6 (right)|5 µM, Q = 0.23, same light: the solution glows red (fluorescence is 96 % of its red channel, which is 8 x its green).
 spill_1uM_D65|Fig. 5.8 (top)|1 µM spill (4 mm deep) under D65: a barely visible tint (green/red +5 % over the floor): the thesis's concentration in a real puddle has almost no absorbance.
 spill_1uM_UVB_D65|Fig. 5.8 (bottom)|1 µM spill, UVB + D65: the floor turns lavender from the tube's visible lines; the spill's fluorescence (about 4 % of red) is not visible.
 spill_25uM_D65|Fig. 5.8 (top), 25 µM|The same puddle at 25 µM (1 µM over 10 cm): a transparent green pool.
@@ -72,6 +75,7 @@ touch "$times"
 while IFS='|' read -r name fig caption; do
   [ -n "$name" ] || continue
   want "$name" || continue
+  [ "$md_only" = 0 ] || continue
   scene=scenes/$name.json
   [ -f "$scene" ] || { echo "missing $scene" >&2; exit 1; }
   load=$(cut -d' ' -f1 /proc/loadavg)
