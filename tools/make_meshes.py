@@ -26,6 +26,7 @@ Meshes written:
   beaker_glass.obj, beaker_liquid.obj   a cylindrical lab beaker (Figs 5.4–5.6)
   teapot_glass.obj, teapot_liquid.obj   a round-bellied glass teapot with lid knob,
                                         spout and handle (Figs 5.9–5.11)
+  backdrop.obj                          a photographer's sweep (floor, cove, wall) for the sets
   leaf.obj                              an open, curved leaf blade (for --mode shell)
   spill_height.txt                      a puddle height field (0..1) for --mode spill
 """
