@@ -1,5 +1,6 @@
 #include "analysis/image_error.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -30,6 +31,20 @@ LayerError layer_error(const ImageLayer& x, const ImageLayer& r) {
     e.bias = diff / double(n);
   }
   e.rmse = std::sqrt(e.mse);
+  if (n) {
+    std::vector<float> magnitude(n);
+    for (size_t i = 0; i < n; ++i) magnitude[i] = std::abs(r.pixels[i]);
+    const size_t k = std::min(n - 1, size_t(0.999 * double(n)));
+    std::nth_element(magnitude.begin(), magnitude.begin() + k, magnitude.end());
+    const double q = magnitude[k];
+    double sum_x = 0, sum_rc = 0;
+    for (size_t i = 0; i < n; ++i) {
+      sum_x += std::clamp(double(x.pixels[i]), -q, q);
+      sum_rc += std::clamp(double(r.pixels[i]), -q, q);
+    }
+    e.bias_clamped = (sum_x - sum_rc) / double(n);
+    e.reference_mean_clamped = sum_rc / double(n);
+  }
   return e;
 }
 

@@ -79,7 +79,15 @@ Scene load_scene_variant(const std::filesystem::path& file, const SceneOverrides
       std::filesystem::remove(p, ec);
     }
   } remove{tmp};
-  return load_scene(tmp, overrides);
+  try {
+    return load_scene(tmp, overrides);
+  } catch (const InputError& e) {
+    // Name the user's file, not the temporary, and say it was edited.
+    std::string message = e.what();
+    const std::string from = tmp.string(), to = file.string() + " (with --set)";
+    for (size_t at; (at = message.find(from)) != std::string::npos;) message.replace(at, from.size(), to);
+    throw InputError(message);
+  }
 }
 
 }  // namespace chlorovdb

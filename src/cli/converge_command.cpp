@@ -149,13 +149,15 @@ int converge(const ConvergeArgs& a) {
   const std::filesystem::path csv = prefix.string() + ".csv";
   {
     std::ofstream f(csv);
-    f << "label,spp,wall_seconds,cpu_seconds,clock,time_budget,layer,mse,rmse,rel_mse,bias,reference_mean,efficiency\n";
+    f << "label,spp,wall_seconds,cpu_seconds,clock,time_budget,layer,mse,rmse,rel_mse,bias,reference_mean,"
+         "bias_clamped,reference_mean_clamped,efficiency,efficiency_rel\n";
     for (const ConvergencePoint& p : points)
       for (const LayerError& e : p.errors) {
         const double t = p.time(co.clock);
-        f << fmt::format("{},{},{:.6f},{:.6f},{},{:g},{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e}\n", label, p.spp, p.seconds,
-                         p.cpu_seconds, a.clock, p.time_budget, e.layer, e.mse, e.rmse, e.rel_mse, e.bias, e.reference_mean,
-                         e.mse > 0 && t > 0 ? 1.0 / (e.mse * t) : 0.0);
+        f << fmt::format("{},{},{:.6f},{:.6f},{},{:g},{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e}\n", label,
+                         p.spp, p.seconds, p.cpu_seconds, a.clock, p.time_budget, e.layer, e.mse, e.rmse, e.rel_mse, e.bias,
+                         e.reference_mean, e.bias_clamped, e.reference_mean_clamped,
+                         e.mse > 0 && t > 0 ? 1.0 / (e.mse * t) : 0.0, e.rel_mse > 0 && t > 0 ? 1.0 / (e.rel_mse * t) : 0.0);
       }
     if (!f) throw InputError(csv.string(), "", "", "cannot be written");
   }

@@ -30,9 +30,10 @@ struct Row {
   std::string label, layer, clock;
   int spp = 0;
   double seconds = 0, budget = 0, mse = 0, rmse = 0, rel_mse = 0, bias = 0, efficiency = 0;
-  double reference_mean = 0;
-  // Mean bias relative to the reference's mean: about 0 (within noise) for an
-  // unbiased estimator; -1 means the variant renders nothing of this layer.
+  double reference_mean = 0, efficiency_rel = 0;
+  // Mean bias relative to the reference's mean, both images clamped at the
+  // reference's 99.9th percentile (analysis/image_error.h): about 0 (within
+  // noise) for an unbiased estimator; -1: the variant renders nothing of this layer.
   double relative_bias() const { return reference_mean != 0 ? bias / reference_mean : 0.0; }
 };
 
@@ -55,7 +56,7 @@ std::vector<Row> read_rows(const std::vector<std::string>& files, const std::str
     const auto header = split(line);
     for (size_t i = 0; i < header.size(); ++i) col[header[i]] = i;
     for (const char* need : {"label", "spp", "wall_seconds", "cpu_seconds", "clock", "time_budget", "layer", "mse", "rmse",
-                             "rel_mse", "bias", "efficiency"})
+                             "rel_mse", "bias", "reference_mean", "efficiency"})
       if (!col.count(need)) throw InputError(file, need, "", "missing column (not a chlorovdb converge CSV?)");
     while (std::getline(f, line)) {
       const auto c = split(line);
@@ -72,7 +73,12 @@ std::vector<Row> read_rows(const std::vector<std::string>& files, const std::str
       r.rel_mse = std::stod(c[col["rel_mse"]]);
       r.bias = std::stod(c[col["bias"]]);
       r.efficiency = std::stod(c[col["efficiency"]]);
-      if (col.count("reference_mean")) r.reference_mean = std::stod(c[col["reference_mean"]]);
+      r.reference_mean = std::stod(c[col["reference_mean"]]);
+      if (col.count("bias_clamped")) {  // robust to a reference's fireflies
+        r.bias = std::stod(c[col["bias_clamped"]]);
+        r.reference_mean = std::stod(c[col["reference_mean_clamped"]]);
+      }
+      r.efficiency_rel = col.count("efficiency_rel") ? std::stod(c[col["efficiency_rel"]]) : 0.0;
       rows.push_back(r);
     }
   }
@@ -103,7 +109,10 @@ int plot(const std::vector<std::string>& files, const std::string& layer, const 
   return 0;
 }
 
-// One markdown row per label: its last (largest-effort) point.
+// One markdown row per label: its last (largest-effort) point. Gains are on
+// 1/(relMSE x time): relMSE bounds what each pixel contributes where the
+// reference itself is very bright, so a reference's few unconverged pixels
+// (fireflies) cannot decide the comparison as they do MSE.
 int table(const std::vector<std::string>& files, const std::string& layer, const std::string& baseline) {
   const std::vector<Row> rows = read_rows(files, layer);
   std::vector<std::string> labels;
@@ -112,34 +121,35 @@ int table(const std::vector<std::string>& files, const std::string& layer, const
     if (!last.count(r.label)) labels.push_back(r.label);
     if (!last.count(r.label) || r.seconds >= last[r.label].seconds) last[r.label] = r;
   }
-  const double base = last.count(baseline) ? last[baseline].efficiency : 0.0;
+  const double base = last.count(baseline) ? last[baseline].efficiency_rel : 0.0;
   const std::string clock = rows.empty() ? "wall" : rows.front().clock;
-  fmt::print("| variant | spp | {} time (s) | RMSE | relMSE | mean bias | efficiency 1/(MSE·s) | vs {} |\n",
+  fmt::print("| variant | spp | {} s | RMSE | relMSE | mean bias | 1/(MSE·s) | 1/(relMSE·s) | vs {} |\n",
              clock == "cpu" ? "CPU" : "wall", baseline);
-  fmt::print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
+  fmt::print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
   for (const std::string& label : labels) {
     const Row& r = last[label];
-    fmt::print("| {} | {} | {:.2f} | {:.3e} | {:.3e} | {:+.1f} % | {:.3e} | {} |\n", label, r.spp, r.seconds, r.rmse,
-               r.rel_mse, 100 * r.relative_bias(), r.efficiency,
-               base > 0 ? fmt::format("{:.2f}×", r.efficiency / base) : "–");
+    fmt::print("| {} | {} | {:.2f} | {:.3e} | {:.3e} | {:+.1f} % | {:.3e} | {:.3e} | {} |\n", label, r.spp, r.seconds,
+               r.rmse, r.rel_mse, 100 * r.relative_bias(), r.efficiency, r.efficiency_rel,
+               base > 0 ? fmt::format("{:.2f}×", r.efficiency_rel / base) : "–");
   }
   return 0;
 }
 
-// "LABEL GAIN" of the most efficient label (among `candidates`, all if empty) over `baseline`.
+// "LABEL GAIN BIAS BASELINE_BIAS": the label with the highest 1/(relMSE x time)
+// (among `candidates`, all if empty), its gain over `baseline`, and both
+// relative mean biases in per cent.
 int best(const std::vector<std::string>& files, const std::string& layer, const std::string& baseline,
          const std::vector<std::string>& candidates) {
   std::map<std::string, Row> last;
   for (const Row& r : read_rows(files, layer))
     if (!last.count(r.label) || r.seconds >= last[r.label].seconds) last[r.label] = r;
-  if (!last.count(baseline) || !(last[baseline].efficiency > 0)) throw std::runtime_error("no baseline " + baseline);
+  if (!last.count(baseline) || !(last[baseline].efficiency_rel > 0)) throw std::runtime_error("no baseline " + baseline);
   std::string top;
   for (const auto& [label, r] : last) {
     if (!candidates.empty() && std::find(candidates.begin(), candidates.end(), label) == candidates.end()) continue;
-    if (top.empty() || r.efficiency > last[top].efficiency) top = label;
+    if (top.empty() || r.efficiency_rel > last[top].efficiency_rel) top = label;
   }
-  // LABEL GAIN BIAS_OF_LABEL BIAS_OF_BASELINE (relative mean biases, per cent)
-  fmt::print("{} {:.2f} {:+.1f} {:+.1f}\n", top, last[top].efficiency / last[baseline].efficiency,
+  fmt::print("{} {:.2f} {:+.1f} {:+.1f}\n", top, last[top].efficiency_rel / last[baseline].efficiency_rel,
              100 * last[top].relative_bias(), 100 * last[baseline].relative_bias());
   return 0;
 }
