@@ -192,15 +192,17 @@ SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, 
 SampledSpectrum reference_fluorescence_event(const Scene& scene, const Vec3& p, int medium, const SampledSpectrum& beta,
                                              const SampledWavelengths& lambda, Rng& rng, PathStats& stats) {
   const auto& pigments = scene.fluorescence[medium];
-  if (pigments.empty() || scene.light_sampler.empty()) return {};
+  if (pigments.empty() || scene.lights.empty()) return {};
   const FluorescentPigment& fp = pigments[0];
   // Emission is triggered by absorption at the hero wavelength, inside the emission domain only.
   if (fp.emission(lambda[0]) == 0.f) return {};
   if (rng.uniform() >= fp.quantum_yield) return {};  // Q as a roulette
   ++stats.fluorescence_events;
-  const auto pick = scene.light_sampler.sample(rng.uniform());
-  if (!pick) return {};
-  const Light& light = scene.lights[pick->index];
+  // "A randomly selected light source" (thesis Ch. 4): uniform over all lights.
+  const int n_lights = int(scene.lights.size());
+  const int pick = std::min(int(rng.uniform() * n_lights), n_lights - 1);
+  const float pick_pmf = 1.f / float(n_lights);
+  const Light& light = scene.lights[pick];
   const Spectrum& S = emission_spectrum(light);
   const float lo = std::max(S.support_min(), kLambdaMinUV), hi = std::min(S.support_max(), lambda[0]);
   if (!(hi > lo)) return {};
@@ -217,7 +219,7 @@ SampledSpectrum reference_fluorescence_event(const Scene& scene, const Vec3& p, 
                           DielectricCrossing::block, TransmittanceEstimator::delta);
   if (T[0] == 0.f) return {};
   const SampledSpectrum f = fp.emission.sample(lambda);
-  return beta * f * (ls->L[0] * T[0] / (ls->pdf * pick->pmf));
+  return beta * f * (ls->L[0] * T[0] / (ls->pdf * pick_pmf));
 }
 
 }  // namespace chlorovdb

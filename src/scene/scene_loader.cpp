@@ -243,10 +243,10 @@ Light read_light(ParamReader& l, float unit) {
 // Light-selection weight: emitted power (times `share`), computed at unit scale
 // and multiplied in double, so scales from 1e-30 to 1e30 neither overflow nor
 // vanish; only ratios matter, so the weights are rescaled to a maximum of 1.
-double light_power(const Light& light, const GeometryScene& geometry) {
+double light_power(const Light& light, const GeometryScene& geometry, float lambda_min_nm, float lambda_max_nm) {
   Light unit_scale = light;
   std::visit([](auto& l) { l.scale = 1.f; }, unit_scale);
-  return double(phi_power(unit_scale, geometry)) * light_scale(light);
+  return double(phi_power(unit_scale, geometry, lambda_min_nm, lambda_max_nm)) * light_scale(light);
 }
 
 std::vector<float> relative_weights(const std::vector<double>& w) {
@@ -296,7 +296,7 @@ void setup_fluorescence(Scene& scene, const std::string& mode) {
         // can absorb, so lights dark in the excitation band are never picked.
         const double total = emission_spectrum(light).integral(kLambdaMinUV, kLambdaMax);
         const double in_band = skip ? es.total() / std::max(1e-300, total) : 1.0;
-        const double w = light_power(light, scene.geometry) * in_band;
+        const double w = light_power(light, scene.geometry, kLambdaMinUV, kLambdaMax) * in_band;
         if (!(w > 0.0)) continue;
         fp.lights.push_back(int(l));
         fp.excitation.push_back(std::move(es));
@@ -425,7 +425,9 @@ Scene load_scene(const std::filesystem::path& file, const SceneOverrides& overri
     if (std::holds_alternative<EnvironmentLight>(scene.lights[l])) scene.infinite_lights.push_back(int(l));
   }
   std::vector<double> power;
-  for (const Light& light : scene.lights) power.push_back(light_power(light, scene.geometry));
+  // Camera paths carry visible wavelengths only: UV power they never see must not
+  // draw their light samples (a UVB lamp tripled the noise of visible lighting).
+  for (const Light& light : scene.lights) power.push_back(light_power(light, scene.geometry, kLambdaMin, kLambdaMax));
   scene.light_sampler = LightSampler(relative_weights(power));
   setup_fluorescence(scene, fluorescence_mode);
   return scene;
