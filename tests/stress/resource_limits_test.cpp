@@ -1,11 +1,9 @@
 // Resource limits (issue 7): inputs that would need more memory than the machine
 // has must be refused, with an estimate, before anything large is allocated.
 //
-// What exists today is tested here: voxelize estimates and refuses (voxelize.h
-// check_estimate). What is missing is written as DISABLED_ tests stating the
-// wanted behaviour; run them with --gtest_also_run_disabled_tests to see what
-// happens now (docs/robustness.md lists each gap). They stay disabled because
-// today they end in std::bad_alloc, or under ASan in an allocation-size abort.
+// Voxelize (voxelize.h check_estimate), the grid loader's brick table, the film,
+// its spectral bins and the scene loader all refuse with the estimate and
+// MemAvailable (core/memory.h) before allocating.
 #include <gtest/gtest.h>
 
 #include <chrono>
