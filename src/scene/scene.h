@@ -88,7 +88,7 @@ struct Scene {
   std::vector<ShapeBinding> shapes;  // by shape id
   std::vector<Material> materials;
   std::vector<Light> lights;
-  LightSampler light_sampler;
+  LightSampler light_sampler;        // camera-path NEE: visible power; uniform environments excluded
   std::vector<int> infinite_lights;  // environment lights, seen by rays that escape
   std::vector<Medium> media;
   std::vector<std::string> medium_names;

@@ -427,7 +427,15 @@ Scene load_scene(const std::filesystem::path& file, const SceneOverrides& overri
   std::vector<double> power;
   // Camera paths carry visible wavelengths only: UV power they never see must not
   // draw their light samples (a UVB lamp tripled the noise of visible lighting).
-  for (const Light& light : scene.lights) power.push_back(light_power(light, scene.geometry, kLambdaMin, kLambdaMax));
+  // A uniform environment is not light-sampled on camera paths (as pbrt-v4's volpath): at
+  // a diffuse surface or an isotropic phase vertex the scattering sample already draws its
+  // directions as well as a uniform sphere would, so its NEE sample bought little and took
+  // half the samples from lights only NEE can reach (cloud benchmark: -36 % MSE, -9 % time).
+  // Escaping paths then carry its radiance with MIS weight 1. Excitation keeps sampling it.
+  for (const Light& light : scene.lights)
+    power.push_back(std::holds_alternative<EnvironmentLight>(light)
+                        ? 0.0
+                        : light_power(light, scene.geometry, kLambdaMin, kLambdaMax));
   scene.light_sampler = LightSampler(relative_weights(power));
   setup_fluorescence(scene, fluorescence_mode);
   return scene;
