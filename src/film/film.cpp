@@ -77,12 +77,24 @@ void Film::enable_spectral(float lambda_min_nm, float lambda_max_nm, int bins) {
 
 void Film::add_sample(int x, int y, int layer, const SampledSpectrum& L, const SampledWavelengths& lambda) {
   assert(x >= 0 && x < width_ && y >= 0 && y < height_ && layer >= 0 && layer < int(xyz_.size()));
-  const XYZ xyz = to_xyz(L, lambda);
+  add_layer_sample(size_t(y) * size_t(width_) + size_t(x), layer, L, lambda, xyz_lane_weights(lambda));
+}
+
+void Film::add_sample(int x, int y, std::span<const SampledSpectrum> layers, const SampledWavelengths& lambda) {
+  assert(x >= 0 && x < width_ && y >= 0 && y < height_ && layers.size() == xyz_.size());
+  const XyzLaneWeights w = xyz_lane_weights(lambda);
+  const size_t pixel = size_t(y) * size_t(width_) + size_t(x);
+  for (size_t l = 0; l < layers.size(); ++l)
+    if (!layers[l].is_black() || layers[l].has_nonfinite()) add_layer_sample(pixel, int(l), layers[l], lambda, w);
+}
+
+void Film::add_layer_sample(size_t pixel, int layer, const SampledSpectrum& L, const SampledWavelengths& lambda,
+                            const XyzLaneWeights& w) {
+  const XYZ xyz = to_xyz(L, w);
   if (L.has_nonfinite() || !std::isfinite(xyz.x) || !std::isfinite(xyz.y) || !std::isfinite(xyz.z)) {
     nonfinite_.fetch_add(1, std::memory_order_relaxed);
     return;
   }
-  const size_t pixel = size_t(y) * size_t(width_) + size_t(x);
   double* sum = &xyz_[size_t(layer)][pixel * 3];
   sum[0] += xyz.x;
   sum[1] += xyz.y;

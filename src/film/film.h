@@ -10,10 +10,12 @@
 // radiance (W m⁻² sr⁻¹ nm⁻¹, relative), written as an EXR spectral layer.
 #include <atomic>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <vector>
 
 #include "io/image.h"
+#include "spectra/color.h"
 #include "spectra/sampled.h"
 
 namespace chlorovdb {
@@ -41,6 +43,9 @@ class Film {
   // A sample with a non-finite value in any lane, or a non-finite estimate, is
   // dropped and counted instead.
   void add_sample(int x, int y, int layer, const SampledSpectrum& L, const SampledWavelengths& lambda);
+  // One sample of every layer at once (layers[l] for layer l): the colour-matching
+  // functions are looked up once, and black layers cost nothing.
+  void add_sample(int x, int y, std::span<const SampledSpectrum> layers, const SampledWavelengths& lambda);
   uint64_t nonfinite_samples() const { return nonfinite_.load(std::memory_order_relaxed); }
 
   // Mean over `samples_per_pixel` samples: one RGB layer per layer name (channels
@@ -57,6 +62,8 @@ class Film {
   void merge(const Film& other);
 
  private:
+  void add_layer_sample(size_t pixel, int layer, const SampledSpectrum& L, const SampledWavelengths& lambda,
+                        const XyzLaneWeights& w);
   int width_, height_;
   std::vector<std::string> layer_names_;
   ColorSpace color_space_;

@@ -43,9 +43,9 @@ void render_tile(const Scene& scene, Film& film, int fx0, int fy0, const Tile& t
         const Point2 film_pos{x + rng.uniform(), y + rng.uniform()};  // box filter
         const Ray ray = scene.camera.generate_ray(film_pos, Point2{rng.uniform(), rng.uniform()});
         const PathRadiance L = trace_path(scene, ray, scene.camera_medium, lambda, rng, stats);
-        film.add_sample(x - fx0, y - fy0, kLayerTotal, L.fluorescence + L.other, lambda);
-        film.add_sample(x - fx0, y - fy0, kLayerFluorescence, L.fluorescence, lambda);
-        film.add_sample(x - fx0, y - fy0, kLayerNonFluorescence, L.other, lambda);
+        const SampledSpectrum layers[] = {L.fluorescence + L.other, L.fluorescence, L.other};
+        static_assert(kLayerTotal == 0 && kLayerFluorescence == 1 && kLayerNonFluorescence == 2);
+        film.add_sample(x - fx0, y - fy0, layers, lambda);
       }
 }
 

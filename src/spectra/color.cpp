@@ -17,7 +17,26 @@ namespace {
 struct CieCmfs {
   Spectrum x, y, z;
   double y_integral;
+  // The same tables for direct indexing (the film looks them up once per lane of
+  // every sample): samples every `step` nm from `lambda0`, 0 if the CSV is not uniform.
+  float lambda0 = 0.f, step = 0.f;
+  std::vector<XYZ> uniform;
 };
+
+// Fills the direct-index copy when the table's wavelengths are evenly spaced.
+void index_uniform_table(CieCmfs& c) {
+  const auto& x = std::get<Spectrum::Tabulated>(c.x.representation());
+  const auto& y = std::get<Spectrum::Tabulated>(c.y.representation());
+  const auto& z = std::get<Spectrum::Tabulated>(c.z.representation());
+  const size_t n = x.lambda.size();
+  if (n < 2 || y.lambda != x.lambda || z.lambda != x.lambda) return;
+  const float step = x.lambda[1] - x.lambda[0];
+  for (size_t i = 1; i < n; ++i)
+    if (std::fabs(x.lambda[i] - x.lambda[0] - float(i) * step) > 1e-4f * step) return;
+  c.lambda0 = x.lambda[0];
+  c.step = step;
+  for (size_t i = 0; i < n; ++i) c.uniform.push_back({x.value[i], y.value[i], z.value[i]});
+}
 
 // Loaded on first use (thread-safe static); a failed load throws and is retried next call.
 const CieCmfs& cmfs() {
@@ -28,6 +47,7 @@ const CieCmfs& cmfs() {
     const auto& y = std::get<Spectrum::Tabulated>(r.y.representation());
     for (size_t i = 0; i + 1 < y.lambda.size(); ++i)
       r.y_integral += 0.5 * (double(y.value[i]) + y.value[i + 1]) * (double(y.lambda[i + 1]) - y.lambda[i]);
+    index_uniform_table(r);
     return r;
   }();
   return c;
@@ -109,24 +129,44 @@ RGB apply(const Mat3& m, const XYZ& c) {
 
 XYZ cie_cmf(float lambda_nm) {
   const CieCmfs& c = cmfs();
-  return {c.x(lambda_nm), c.y(lambda_nm), c.z(lambda_nm)};
+  if (c.uniform.empty()) return {c.x(lambda_nm), c.y(lambda_nm), c.z(lambda_nm)};
+  // Linear interpolation between table rows, zero outside: what Spectrum's tabulated form does.
+  const float u = (lambda_nm - c.lambda0) / c.step;
+  if (!(u >= 0.f) || !(u <= float(c.uniform.size() - 1))) return {};
+  const size_t i = std::min(size_t(u), c.uniform.size() - 2);
+  const double f = u - float(i);
+  const XYZ& a = c.uniform[i];
+  const XYZ& b = c.uniform[i + 1];
+  return {a.x + f * (b.x - a.x), a.y + f * (b.y - a.y), a.z + f * (b.z - a.z)};
 }
 
 double cie_y_integral() { return cmfs().y_integral; }
 
-XYZ to_xyz(const SampledSpectrum& L, const SampledWavelengths& lambda) {
-  XYZ sum;
+XyzLaneWeights xyz_lane_weights(const SampledWavelengths& lambda) {
+  XyzLaneWeights w;
+  const double norm = 1.0 / (double(lambda.count()) * cie_y_integral());
   for (int i = 0; i < lambda.count(); ++i) {
     if (lambda.pdf(i) == 0.f) continue;
     const XYZ cmf = cie_cmf(lambda[i]);
-    const double w = double(L[i]) / lambda.pdf(i);
-    sum.x += cmf.x * w;
-    sum.y += cmf.y * w;
-    sum.z += cmf.z * w;
+    const double k = norm / lambda.pdf(i);
+    w.x[i] = cmf.x * k;
+    w.y[i] = cmf.y * k;
+    w.z[i] = cmf.z * k;
   }
-  const double norm = 1.0 / (double(lambda.count()) * cie_y_integral());
-  return {sum.x * norm, sum.y * norm, sum.z * norm};
+  return w;
 }
+
+XYZ to_xyz(const SampledSpectrum& L, const XyzLaneWeights& w) {
+  XYZ sum;
+  for (int i = 0; i < kMaxWavelengths; ++i) {
+    sum.x += w.x[i] * L[i];
+    sum.y += w.y[i] * L[i];
+    sum.z += w.z[i] * L[i];
+  }
+  return sum;
+}
+
+XYZ to_xyz(const SampledSpectrum& L, const SampledWavelengths& lambda) { return to_xyz(L, xyz_lane_weights(lambda)); }
 
 XYZ spectrum_to_xyz(const Spectrum& s) {
   // Knots: the CMF table's samples (1 nm) plus the spectrum's own, where the

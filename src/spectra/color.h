@@ -4,6 +4,8 @@
 //
 // Normalisation: XYZ = ∫ cmf(λ) L(λ) dλ / ∫ ȳ(λ) dλ, so a constant spectrum of 1
 // has Y = 1 (pbrt-v4's convention) and Y is in the units of L.
+#include <array>
+
 #include "spectra/sampled.h"
 #include "spectra/spectrum.h"
 
@@ -32,6 +34,13 @@ double cie_y_integral();
 // Monte Carlo estimate from one path: the mean over lambda.count() lanes of
 // cmf(λ_i) L_i / pdf_i, divided by ∫ȳ. Lanes with pdf 0 (terminated) contribute 0.
 XYZ to_xyz(const SampledSpectrum& L, const SampledWavelengths& lambda);
+// The same sum split in two: per-lane factors cmf(λ_i) / (pdf_i · count · ∫ȳ), computed
+// once per sample, then one dot product per spectrum (the film's layers share them).
+struct XyzLaneWeights {
+  std::array<double, kMaxWavelengths> x{}, y{}, z{};
+};
+XyzLaneWeights xyz_lane_weights(const SampledWavelengths& lambda);
+XYZ to_xyz(const SampledSpectrum& L, const XyzLaneWeights& w);
 // The integral itself, exact for tabulated and constant spectra (Simpson's rule
 // between the knots of both tables, where the integrand is quadratic).
 XYZ spectrum_to_xyz(const Spectrum& s);
