@@ -5,9 +5,9 @@
 
 namespace chlorovdb {
 
-ExcitationSampler::ExcitationSampler(const Spectrum& light, const Spectrum& epsilon, float lambda_min,
-                                     float lambda_max, float bin_nm)
-    : lambda_min_(lambda_min), bin_nm_(bin_nm) {
+ExcitationSampler::ExcitationSampler(const Spectrum& light, const Spectrum& epsilon, ExcitationSampling mode,
+                                     float lambda_min, float lambda_max, float bin_nm)
+    : mode_(mode), lambda_min_(lambda_min), bin_nm_(bin_nm) {
   const int n = std::max(1, int(std::ceil((lambda_max - lambda_min) / bin_nm)));
   std::vector<float> weight(n);
   double total = 0;
@@ -27,10 +27,22 @@ ExcitationSampler::ExcitationSampler(const Spectrum& light, const Spectrum& epsi
     weight[b] = float(std::max(mean, peak / kSub));
   }
   total_ = float(total);
-  if (total_ > 0.f) bins_ = Distribution1D(weight);
+  if (!(total_ > 0.f)) return;
+  bins_ = Distribution1D(weight);
+  int first = 0, last = n - 1;
+  while (first < n && !(weight[first] > 0.f)) ++first;
+  while (last > first && !(weight[last] > 0.f)) --last;
+  support_min_ = float(lambda_min + double(first) * bin_nm);
+  support_max_ = float(lambda_min + double(last + 1) * bin_nm);
+  uniform_pdf_ = float(1.0 / (double(support_max_) - double(support_min_)));
 }
 
 float ExcitationSampler::sample(float u, float* pdf) const {
+  if (mode_ == ExcitationSampling::uniform) {
+    *pdf = uniform_pdf_;
+    const float lambda = float(support_min_ + double(u) * (double(support_max_) - double(support_min_)));
+    return std::clamp(lambda, support_min_, std::nextafter(support_max_, support_min_));
+  }
   float pmf, u_in;
   const int b = bins_.sample(u, &pmf, &u_in);
   *pdf = pmf / bin_nm_;
@@ -42,6 +54,8 @@ float ExcitationSampler::sample(float u, float* pdf) const {
 }
 
 float ExcitationSampler::pdf(float lambda) const {
+  if (mode_ == ExcitationSampling::uniform)
+    return lambda >= support_min_ && lambda < support_max_ ? uniform_pdf_ : 0.f;
   const int b = int(std::floor((double(lambda) - lambda_min_) / bin_nm_));
   if (b < 0 || b >= bins_.size()) return 0.f;
   return bins_.pmf(b) / bin_nm_;

@@ -52,8 +52,10 @@ float distance_to_scene_exit(const Scene& scene, const Ray& ray) {
   return intersect_bounds(scene.geometry.bounds(), ray, kInfinity, &t0, &t1) ? t1 : 0.f;
 }
 
-// Density of λ' for a light's excitation sampler; a light that cannot excite
-// the pigment (kept only when skips are off, to measure them) draws λ' uniformly.
+// Density of λ' for a light's excitation sampler (∝ S·ε·λ', or uniform over
+// that band with render.excitation_sampling = uniform: the sampler knows which);
+// a light that cannot excite the pigment (kept only when skips are off, to
+// measure them) draws λ' uniformly over the whole range.
 float excitation_pdf(const ExcitationSampler& es, float lambda) {
   return es.can_excite() ? es.pdf(lambda) : 1.f / (kLambdaMax - kLambdaMinUV);
 }
@@ -147,6 +149,15 @@ SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, 
   const SampledSpectrum f = fp.emission.sample(lambda);
   if (f.is_black() && scene.settings.skip_unneeded_work) return {};
 
+  // Q as a roulette (render.quantum_yield_mode): the event is fluorescence with
+  // probability Q and then weighs 1, else it contributes nothing and costs
+  // nothing more. Drawn before any other work of the event, so what it saves is
+  // the point, the transmittance and the excitation rays. Q = 0 never passes
+  // (uniform() < 0 is false), Q = 1 always does (uniform() < 1).
+  const bool q_roulette = scene.settings.quantum_yield_mode == QuantumYieldMode::roulette;
+  if (q_roulette && !(rng.uniform() < fp.quantum_yield)) return {};
+  const float q_weight = q_roulette ? 1.f : fp.quantum_yield;
+
   if (!std::isfinite(t_end) || t_end >= kInfinity) t_end = distance_to_scene_exit(scene, ray);
   if (!(t_end > 0.f)) return {};
 
@@ -172,7 +183,7 @@ SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, 
   auto add_emission = [&](float absorbed, float lp) {
     if (absorbed == 0.f) return;
     for (int i = 0; i < n; ++i)
-      j[i] += fp.quantum_yield * f[i] * fp.redistribution(lp, lambda[i]) * kInv4Pi / lambda[i] * absorbed;
+      j[i] += q_weight * f[i] * fp.redistribution(lp, lambda[i]) * kInv4Pi / lambda[i] * absorbed;
   };
   float lp = 0.f;
   const float direct = direct_excitation(scene, fp, x, medium, c, rng, stats, &lp);

@@ -13,6 +13,9 @@ namespace chlorovdb {
 // adds the fluence that scattered, reflected, refracted or was re-emitted;
 // `continuations` counts those the calling path has spawned (it lowers the
 // chance of spawning more, keeping the branching bounded).
+// render.excitation_sampling = uniform draws λ' uniformly over the same band
+// (the ExcitationSampler knows its mode); render.quantum_yield_mode = roulette
+// keeps the event with probability Q at weight 1 instead of weighting it by Q.
 SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, float t_end, int medium,
                                             PreparedMedia& media, Rng& rng, PathStats& stats, int depth,
                                             int* continuations);
@@ -20,7 +23,8 @@ SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, 
 // The thesis's estimator (PHYSICS.md §5), kept to measure its bias and cost:
 // called when the hero wavelength is absorbed at `p`; with probability Q it
 // becomes a fluorescence event that samples λ_e uniformly below λ within the
-// light's support and tests one free path toward the light.
+// light's support and tests one free path toward the light. Neither
+// render.excitation_sampling nor render.quantum_yield_mode changes it.
 SampledSpectrum reference_fluorescence_event(const Scene& scene, const Vec3& p, int medium,
                                              const SampledSpectrum& beta,
                                              const SampledWavelengths& lambda, Rng& rng, PathStats& stats);

@@ -20,6 +20,9 @@
 namespace chlorovdb {
 
 enum class FluorescenceMode { off, direct, full, reference };
+// The quantum yield Q of an event in `direct`/`full` mode: a factor on its
+// contribution, or a roulette (fluorescence with probability Q, weight 1).
+enum class QuantumYieldMode { weight, roulette };
 
 struct RenderSettings {
   int width = 512, height = 512;
@@ -44,6 +47,12 @@ struct RenderSettings {
   // vessel), or stop (exact; light through glass then arrives only by `full`
   // mode's continuation paths, which cannot reach delta lights). docs/fluorescence.md.
   bool excitation_through_glass = true;
+  // Both kept to measure what the defaults buy (docs/fluorescence.md); neither
+  // applies to the `reference` estimator, which always draws λ' uniformly below
+  // λ and uses Q as a roulette, as the thesis does.
+  // λ' of an excitation sample ∝ S·ε·λ' (importance) or uniform over the same band.
+  ExcitationSampling excitation_sampling = ExcitationSampling::importance;
+  QuantumYieldMode quantum_yield_mode = QuantumYieldMode::weight;
 };
 
 // What a surface is made of and what lies on each side of it.

@@ -78,6 +78,12 @@ RenderSettings read_render_settings(ParamReader& top, const SceneOverrides& o, s
     s.spectral_bins = r->get_int("spectral_bins", 0, 0, 4096);
     s.skip_unneeded_work = r->get_bool("skip_unneeded_work", true);
     s.excitation_through_glass = r->get_enum("excitation_through_glass", "fresnel", {"fresnel", "block"}) == "fresnel";
+    s.excitation_sampling = r->get_enum("excitation_sampling", "importance", {"importance", "uniform"}) == "uniform"
+                                ? ExcitationSampling::uniform
+                                : ExcitationSampling::importance;
+    s.quantum_yield_mode = r->get_enum("quantum_yield_mode", "weight", {"weight", "roulette"}) == "roulette"
+                               ? QuantumYieldMode::roulette
+                               : QuantumYieldMode::weight;
     r->finish();
   } else {
     *transmittance = "auto";
@@ -291,7 +297,7 @@ void setup_fluorescence(Scene& scene, const std::string& mode) {
       const bool skip = scene.settings.skip_unneeded_work;
       for (size_t l = 0; l < scene.lights.size(); ++l) {
         const Light& light = scene.lights[l];
-        ExcitationSampler es(emission_spectrum(light), fp.epsilon);
+        ExcitationSampler es(emission_spectrum(light), fp.epsilon, scene.settings.excitation_sampling);
         // Weight: the light's power times the share of its spectrum the pigment
         // can absorb, so lights dark in the excitation band are never picked.
         const double total = emission_spectrum(light).integral(kLambdaMinUV, kLambdaMax);
@@ -317,6 +323,11 @@ void setup_fluorescence(Scene& scene, const std::string& mode) {
     const std::string why = why_direct_is_not_exact(scene);
     s.fluorescence_reason = mode == "direct" && !why.empty() ? "requested; an approximation here: " + why
                                                              : "requested";
+    if (mode == "reference" && (s.excitation_sampling != ExcitationSampling::importance ||
+                                s.quantum_yield_mode != QuantumYieldMode::weight))
+      s.fluorescence_reason +=
+          "; render.excitation_sampling and render.quantum_yield_mode do not apply to it (the thesis's estimator "
+          "always draws the excitation wavelength uniformly below the emitted one and uses Q as a roulette)";
   } else {
     const std::string why = why_direct_is_not_exact(scene);
     s.fluorescence = why.empty() ? FluorescenceMode::direct : FluorescenceMode::full;

@@ -54,6 +54,52 @@ TEST(ExcitationSampler, EstimatesItsOwnIntegralAndPdfMatchesSamples) {
   EXPECT_NEAR(mean, sampler.total(), 4 * sigma + 1e-3 * sampler.total());
 }
 
+TEST(ExcitationSampler, UniformModePdfIntegratesToOneOverTheImportanceSupport) {
+  // render.excitation_sampling = uniform: λ' uniform over the bins where S·ε·λ'
+  // is positive, so it covers everything the importance sampler covers.
+  const Spectrum light = named_spectrum("F2");
+  const Spectrum eps = named_spectrum("chlorophyll_a");
+  const ExcitationSampler importance(light, eps);
+  const ExcitationSampler uniform(light, eps, ExcitationSampling::uniform);
+  ASSERT_TRUE(uniform.can_excite());
+  EXPECT_EQ(uniform.mode(), ExcitationSampling::uniform);
+  EXPECT_EQ(uniform.total(), importance.total());
+  EXPECT_LT(uniform.support_min(), uniform.support_max());
+  const float p = uniform.pdf(0.5f * (uniform.support_min() + uniform.support_max()));
+  EXPECT_NEAR(double(p) * (double(uniform.support_max()) - uniform.support_min()), 1.0, 1e-6);
+  double integral = 0;
+  for (float l = kLambdaMinUV; l < kLambdaMax; l += 0.05f) {
+    const float lm = l + 0.025f;
+    integral += uniform.pdf(lm) * 0.05;
+    if (importance.pdf(lm) > 0.f) EXPECT_EQ(uniform.pdf(lm), p) << lm;  // same support
+    if (uniform.pdf(lm) > 0.f) EXPECT_EQ(uniform.pdf(lm), p) << lm;      // flat
+  }
+  EXPECT_NEAR(integral, 1.0, 1e-3);
+  EXPECT_EQ(uniform.pdf(uniform.support_min() - 0.01f), 0.f);
+  EXPECT_EQ(uniform.pdf(uniform.support_max()), 0.f);
+  // Samples stay inside, carry the pdf, and estimate ∫ S ε λ without bias.
+  Rng rng(11, 0);
+  const int n = 400000;
+  double sum = 0, sum2 = 0;
+  for (int i = 0; i < n; ++i) {
+    float pdf;
+    const float l = uniform.sample(rng.uniform(), &pdf);
+    ASSERT_GE(l, uniform.support_min());
+    ASSERT_LT(l, uniform.support_max());
+    ASSERT_EQ(pdf, uniform.pdf(l));
+    const double g = double(light(l)) * eps(l) * l / pdf;
+    sum += g;
+    sum2 += g * g;
+  }
+  for (float u : {0.f, 0.99999994f}) {
+    float pdf;
+    const float l = uniform.sample(u, &pdf);
+    EXPECT_EQ(pdf, uniform.pdf(l)) << u;
+  }
+  const double mean = sum / n, sigma = std::sqrt((sum2 / n - mean * mean) / n);
+  EXPECT_NEAR(mean, uniform.total(), 4 * sigma + 1e-3 * uniform.total());
+}
+
 TEST(ExcitationSampler, LightDarkWhereThePigmentAbsorbsCannotExcite) {
   // A narrow light at 750 nm: chlorophyll a's table ends at 700 nm (zero beyond).
   const ExcitationSampler sampler(Spectrum::gaussian(760.f, 2.f), named_spectrum("chlorophyll_a"));

@@ -45,12 +45,13 @@ struct SlabSetup {
   std::string light = "{\"gaussian\": [420, 8]}";
   double Q = 0.5;
   std::string mode = "direct";
+  std::string render_extra;  // more `render` keys, e.g. R"(, "quantum_yield_mode": "roulette")"
 };
 
 inline std::string slab_scene_json(const SlabSetup& s) {
   char buf[4096];
   std::snprintf(buf, sizeof buf, R"({
-  "render": {"resolution": [8, 8], "spp": 1, "wavelengths": 4, "fluorescence": "%s", "max_depth": 64},
+  "render": {"resolution": [8, 8], "spp": 1, "wavelengths": 4, "fluorescence": "%s", "max_depth": 64%s},
   "camera": {"type": "orthographic", "position": [0, 0, 1], "look_at": [0, 0, 0], "height": 0.01},
   "pigments": {"dye": {
     "extinction": {"table": {"lambda": [%g, %g, %g, %g], "value": [0, %g, %g, 0]}},
@@ -62,7 +63,7 @@ inline std::string slab_scene_json(const SlabSetup& s) {
               "material": "boundary", "inside": "solution"}],
   "lights": [{"type": "distant", "direction": [0, 0, -1], "spectrum": %s, "scale": 1}]
 })",
-                s.mode.c_str(), s.eps_lo - 1e-3, s.eps_lo, s.eps_hi, s.eps_hi + 1e-3, s.epsilon, s.epsilon, s.Q,
+                s.mode.c_str(), s.render_extra.c_str(), s.eps_lo - 1e-3, s.eps_lo, s.eps_hi, s.eps_hi + 1e-3, s.epsilon, s.epsilon, s.Q,
                 s.concentration, s.D, s.light.c_str());
   return buf;
 }

@@ -91,6 +91,21 @@ TEST(SceneErrors, UnknownEnumValue) {
   EXPECT_NE(msg.find("did you mean \"direct\""), std::string::npos) << msg;
 }
 
+TEST(SceneErrors, UnknownExcitationSamplingOrQuantumYieldMode) {
+  std::string msg = load_error(scene_with(R"("render": {"excitation_sampling": "unifrom"})"), "bad_sampling.json");
+  EXPECT_NE(msg.find("bad_sampling.json"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("render.excitation_sampling"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("unifrom"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("did you mean \"uniform\""), std::string::npos) << msg;
+  msg = load_error(scene_with(R"("render": {"quantum_yield_mode": "rulette"})"), "bad_qmode.json");
+  EXPECT_NE(msg.find("bad_qmode.json"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("render.quantum_yield_mode"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("rulette"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("did you mean \"roulette\""), std::string::npos) << msg;
+  EXPECT_EQ(load_error(scene_with(R"("render": {"excitation_sampling": "uniform", "quantum_yield_mode": "roulette"})")),
+            "");
+}
+
 TEST(SceneErrors, MissingMeshFileNamesTheFile) {
   const std::string msg = load_error(scene_with(R"(
     "materials": {"white": {"type": "diffuse"}},
