@@ -47,6 +47,12 @@ std::string where(int line, std::string_view column) { return fmt::format("line 
 
 CsvTable read_csv_table(const std::filesystem::path& path) {
   const std::string file = path.string();
+  // A device, FIFO or directory would be read forever (/dev/zero: one endless
+  // line) or give a confusing parse error: only regular files are tables.
+  std::error_code ec;
+  const auto status = std::filesystem::status(path, ec);
+  if (!ec && std::filesystem::exists(status) && !std::filesystem::is_regular_file(status))
+    throw InputError(file, "", "", "not a regular file (a spectral table must be a CSV file, not a directory, device or pipe)");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(file, "", "", "cannot open spectral table (missing or unreadable file)");
 

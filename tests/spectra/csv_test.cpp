@@ -118,6 +118,20 @@ TEST(Csv, UnreadableFileIsNamed) {
   }
 }
 
+// Issue 7, finding F1: /dev/zero (or a FIFO, or /dev/stdin) used to be read forever.
+TEST(Csv, DevicesAndDirectoriesAreNotTables) {
+  for (const char* path : {"/dev/zero", "/dev/null"}) {
+    if (!std::filesystem::exists(path)) continue;
+    try {
+      read_csv_table(path);
+      ADD_FAILURE() << path << ": no InputError";
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("not a regular file"), std::string::npos) << e.what();
+    }
+  }
+  EXPECT_THROW(read_csv_table(std::filesystem::temp_directory_path()), InputError);
+}
+
 TEST(Csv, EveryShippedTableLoads) {
   // Non-numeric trailing columns (IOCCG source_code) do not matter unless requested.
   for (const std::string& name : spectrum_names()) EXPECT_NO_THROW(named_spectrum(name)) << name;
