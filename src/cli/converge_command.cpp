@@ -72,7 +72,7 @@ Command add_converge_command(CLI::App& app) {
   ConvergeArgs& r = *args;
   CLI::App* sub = app.add_subcommand(
       "converge", "Error against a reference (or an analytic case) at increasing samples / time -> CSV + SVG");
-  sub->add_option("scene", r.scene, "Scene file (not needed with --analytic)")->check(CLI::ExistingFile);
+  sub->add_option("scene", r.scene, "Scene file (not needed with --analytic)")->check(RegularFile);
   auto* ref = sub->add_option("--reference", r.reference, "Reference EXR (e.g. from `chlorovdb reference`)")
                   ->check(CLI::ExistingFile);
   auto* ana = sub->add_option("--analytic", r.analytic, "Analytic case instead of a reference: slab | slab_transmission | slab_linear");

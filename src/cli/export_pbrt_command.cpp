@@ -49,7 +49,7 @@ Command add_export_pbrt_command(CLI::App& app) {
   auto args = std::make_shared<ExportPbrtArgs>();
   ExportPbrtArgs& r = *args;
   CLI::App* sub = app.add_subcommand("export-pbrt", "Write the scene in pbrt-v4's format (scenes without fluorescence)");
-  sub->add_option("scene", r.scene, "Scene file")->required()->check(CLI::ExistingFile);
+  sub->add_option("scene", r.scene, "Scene file")->required()->check(RegularFile);
   sub->add_option("-o,--output", r.output, "Output .pbrt (default: the scene's name in the current folder)");
   sub->add_option("--spp", r.spp, "pbrt pixel samples (default: the scene's spp)")->check(CLI::Range(1, 1 << 24));
   sub->add_option("--resolution", r.resolution, "Image size WxH");

@@ -80,7 +80,7 @@ Command add_reference_command(CLI::App& app) {
   auto args = std::make_shared<ReferenceArgs>();
   ReferenceArgs& r = *args;
   CLI::App* sub = app.add_subcommand("reference", "Render a high-sample reference progressively, checkpointing; --resume continues it");
-  sub->add_option("scene", r.scene, "Scene file")->required()->check(CLI::ExistingFile);
+  sub->add_option("scene", r.scene, "Scene file")->required()->check(RegularFile);
   sub->add_option("-o,--output", r.output, "Output EXR (rewritten at every checkpoint)")->required();
   sub->add_option("--spp", r.spp, "Total samples per pixel")->check(CLI::Range(1, 1 << 24));
   sub->add_option("--checkpoint-every", r.checkpoint_every, "Seconds between checkpoint writes (0: after every pass)")

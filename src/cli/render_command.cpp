@@ -88,7 +88,7 @@ Command add_render_command(CLI::App& app) {
   auto args = std::make_shared<RenderArgs>();
   RenderArgs& r = *args;
   CLI::App* sub = app.add_subcommand("render", "Render a scene to a linear EXR and a PNG preview");
-  sub->add_option("scene", r.scene, "Scene file (JSON, docs/scene-format.md)")->required()->check(CLI::ExistingFile);
+  sub->add_option("scene", r.scene, "Scene file (JSON, docs/scene-format.md)")->required()->check(RegularFile);
   sub->add_option("-o,--output", r.output, "Output EXR (default: the scene's name in the current folder)");
   auto* spp = sub->add_option("--spp", r.spp, "Samples per pixel")->check(CLI::Range(1, 1 << 24));
   sub->add_option("--threads", r.threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 1024));
