@@ -308,7 +308,9 @@ Fog mesh_to_fog(const TriangleMesh& mesh, const VoxelizeOptions& o, const Profil
   const detail::BandWidths band = detail::band_widths(o, profile.depth_range());
   // Distances are recomputed below, so OpenVDB's renormalization would only cost time.
   const int flags = openvdb::tools::DISABLE_RENORMALIZATION | (shell ? openvdb::tools::UNSIGNED_DISTANCE_FIELD : 0);
-  openvdb::Int32Grid closest_triangle(int32_t(openvdb::util::INVALID_IDX));
+  // Background: no triangle. (Not `Grid g(int32_t(X))`: clang parses that as a function declaration.)
+  const int32_t no_triangle = int32_t(openvdb::util::INVALID_IDX);
+  openvdb::Int32Grid closest_triangle(no_triangle);
   const openvdb::math::Transform::Ptr unit_transform = openvdb::math::Transform::createLinearTransform(1.0);
   const openvdb::FloatGrid::Ptr sdf = openvdb::tools::meshToVolume<openvdb::FloatGrid>(
       adapter, *unit_transform, band.exterior, band.interior, flags, &closest_triangle);
@@ -505,6 +507,23 @@ std::string provenance_of(const VoxelizeOptions& o, const ProfileSampler& profil
                      o.command.empty() ? describe_options(o, profile) : o.command, input);
 }
 
+// OpenVDB's scale map refuses transforms whose determinant is under 3e-15
+// (ScaleMap: "Non-zero scale values required"), i.e. voxels of about 14 µm and
+// less when the mesh is in metres. Refused here, after the size estimate and
+// before the conversion, as an InputError rather than an openvdb::ArithmeticError
+// escaping at the end (docs/robustness.md, finding F6).
+void check_voxel_volume(const VoxelizeOptions& o) {
+  const Vec3 h = o.voxel_size;
+  const double volume = double(h.x) * double(h.y) * double(h.z);
+  constexpr double kMinVolume = 4e-15;  // OpenVDB's 3e-15 with a margin for rounding
+  if (volume < kMinVolume)
+    throw InputError(source_of(o), "--voxel-size", fmt::format("{},{},{}", h.x, h.y, h.z),
+                     fmt::format("voxels of {:.3g} cubic units are smaller than an OpenVDB transform can hold "
+                                 "({:.0e}; e.g. 15 µm cubes in metres): give the mesh and --voxel-size in millimetres "
+                                 "or micrometres (--scale) and set the scene's length_unit to match",
+                                 volume, kMinVolume));
+}
+
 }  // namespace
 
 VoxelizeReport voxelize_mesh(const TriangleMesh& input, const VoxelizeOptions& o, const std::filesystem::path& output) {
@@ -547,6 +566,7 @@ VoxelizeReport voxelize_mesh(const TriangleMesh& input, const VoxelizeOptions& o
   const ProfileSampler profile(o.profile, body, o.unit, source);
   const VoxelEstimate estimate = estimate_voxels(mesh, o, profile);
   check_estimate(estimate, o);
+  check_voxel_volume(o);
 
   Fog fog = mesh_to_fog(mesh, o, profile);
   const std::string provenance =
@@ -591,6 +611,7 @@ VoxelizeReport voxelize_height_field(const HeightField& f, const VoxelizeOptions
   e.bytes = 1.25 * 2.0 * 4.0 * e.body_voxels;  // one float per voxel, leaves half filled at worst
   e.available_bytes = o.memory_limit_bytes > 0 ? o.memory_limit_bytes : available_memory_bytes();
   check_estimate(e, o);
+  check_voxel_volume(o);
 
   Fog fog = height_field_to_fog(f, origin, cell, o, profile);
   return finish(std::move(fog), o, e, provenance_of(o, profile, fmt::format("{} ({}x{} samples)", source, f.nx, f.nz)),

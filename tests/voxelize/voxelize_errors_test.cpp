@@ -59,6 +59,19 @@ TEST(VoxelizeErrors, BadVoxelSizes) {
   }
 }
 
+// OpenVDB cannot hold a transform for voxels of ~1e-5 m and less (finding F6):
+// an InputError naming the flag and the way out, not openvdb::ArithmeticError.
+TEST(VoxelizeErrors, VoxelsTooSmallForOpenVdbAreAnInputError) {
+  const TriangleMesh box = make_box({{0, 0, 0}, {1e-4f, 1e-4f, 1e-4f}});
+  for (const Vec3 h : {Vec3(1e-5f), Vec3(2e-5f, 5e-6f, 2e-5f), Vec3(1e-6f)}) {
+    VoxelizeOptions o = options_with(VoxelizeMode::solid, h);
+    o.source_name = "tiny.obj";
+    const std::string e = error_of([&] { voxelize_mesh(box, o, temp_path("never.vdb")); });
+    EXPECT_TRUE(contains(e, "tiny.obj: --voxel-size")) << e;
+    EXPECT_TRUE(contains(e, "length_unit")) << e;
+  }
+}
+
 TEST(VoxelizeErrors, ZeroVolumeBoundingBox) {
   // One triangle, front and back: closed, but flat.
   TriangleMesh flat;
