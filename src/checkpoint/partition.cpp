@@ -79,12 +79,13 @@ std::vector<SampleRange> normalized(std::vector<SampleRange> ranges) {
 
 std::optional<SignatureMismatch> signature_difference(const Signature& a, const Signature& b) {
   for (const auto& [key, value] : a) {
-    const auto it = std::find_if(b.begin(), b.end(), [&](const auto& e) { return e.first == key; });
+    // Init-captures: clang before 16 cannot capture a structured binding (C++20 allows it).
+    const auto it = std::find_if(b.begin(), b.end(), [&k = key](const auto& e) { return e.first == k; });
     if (it == b.end()) return SignatureMismatch{key, value, "(missing)"};
     if (it->second != value) return SignatureMismatch{key, value, it->second};
   }
   for (const auto& [key, value] : b)
-    if (std::none_of(a.begin(), a.end(), [&](const auto& e) { return e.first == key; }))
+    if (std::none_of(a.begin(), a.end(), [&k = key](const auto& e) { return e.first == k; }))
       return SignatureMismatch{key, "(missing)", value};
   return std::nullopt;
 }
