@@ -40,9 +40,8 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
     }
     // Strict mode (CHLOROVDB_FUZZ_STRICT=1) also wants a finite integral: values near
     // FLT_MAX pass the reader but overflow it (docs/robustness.md, finding F3).
-    static const bool strict = std::getenv("CHLOROVDB_FUZZ_STRICT") != nullptr;
     const float total = s.integral(250.f, 830.f);
-    if (strict && !std::isfinite(total)) {
+    if (fuzz::strict() && !std::isfinite(total)) {
       std::fprintf(stderr, "load_spectrum_csv: integral %g\n", double(total));
       std::abort();
     }

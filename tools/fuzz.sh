@@ -5,13 +5,16 @@
 #
 # Configures a clang build with ASan + UBSan and -DCHLOROVDB_FUZZ=ON in DIR
 # (default build-fuzz), builds only the fuzz targets, then runs each target for
-# N seconds (default 60) from the seed corpora (fuzz/seeds/<target>, plus
-# scenes/*.json for the scene target). New interesting inputs accumulate in
-# DIR/fuzz/corpus/<target> and survive between runs. A crash, sanitizer report,
-# unexpected exception or hang (> 10 s on one input) stops the target; its input
-# is copied to fuzz/crashes/ and the script exits non-zero.
+# N seconds (default 60) from the seed corpora (fuzz/seeds/<target>, the earlier
+# findings in fuzz/crashes/<target>, plus scenes/*.json for the scene target).
+# New interesting inputs accumulate in DIR/fuzz/corpus/<target> and survive
+# between runs. A crash, sanitizer report, unexpected exception or hang (> 10 s
+# on one input) stops the target; its input is copied to fuzz/crashes/<target>/
+# and the script exits non-zero.
 # With --jobs J > 1 or --keep-going, libFuzzer's fork mode runs J workers (default 1)
-# and keeps going past findings (each lands in the artifacts folder and fuzz/crashes/).
+# and keeps going past findings (each lands in the artifacts folder and fuzz/crashes/<target>/).
+# The build folder is configured as `tools/sanitize.sh --fuzz` configures it, so
+# either script can reuse the other's build.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -29,7 +32,7 @@ while [ $# -gt 0 ]; do
     --build-dir) build_dir=$2; shift 2 ;;
     --no-build) build=0; shift ;;
     --keep-going) keep_going=1; shift ;;
-    -h|--help) sed -n '2,16p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,19p' "$0"; exit 0 ;;
     *) echo "fuzz.sh: unknown argument $1 (see --help)" >&2; exit 2 ;;
   esac
 done
@@ -59,8 +62,8 @@ status=0
 for t in "${targets[@]}"; do
   corpus="$build_dir/fuzz/corpus/$t"
   artifacts="$build_dir/fuzz/artifacts/$t/"
-  mkdir -p "$corpus" "$artifacts" fuzz/crashes
-  seeds=("fuzz/seeds/$t")
+  mkdir -p "$corpus" "$artifacts" "fuzz/crashes/$t"
+  seeds=("fuzz/seeds/$t" "fuzz/crashes/$t")
   [ "$t" = scene ] && seeds+=(scenes)
   fork=()
   if [ "$jobs" -gt 1 ] || [ "$keep_going" = 1 ]; then
@@ -76,12 +79,12 @@ for t in "${targets[@]}"; do
   tail -n 12 "$build_dir/fuzz/$t.log"
   for f in "$artifacts"*; do
     [ -e "$f" ] || continue
-    cp -n "$f" "fuzz/crashes/${t}-$(basename "$f")"
+    cp -n "$f" "fuzz/crashes/$t/$(basename "$f")"
   done
   after=$(ls "$artifacts" | wc -l)
   if [ "$after" -gt "$before" ]; then
     status=1
-    echo "fuzz_$t: $((after - before)) new finding(s), copied to fuzz/crashes/ (full log: $build_dir/fuzz/$t.log)"
+    echo "fuzz_$t: $((after - before)) new finding(s), copied to fuzz/crashes/$t/ (full log: $build_dir/fuzz/$t.log)"
   fi
 done
 exit $status
