@@ -49,9 +49,22 @@ SampledWavelengths SampledWavelengths::sample_visible(float u, int count) {
   check_count(count);
   SampledWavelengths w;
   w.count_ = count;
+  // Once per camera sample, so in float and without atanh/cosh (8 % of the cloud
+  // benchmark's time in double): with t = tanh(a(λ−c)) uniform in [t_min, t_max],
+  // atanh(t) = ½ ln((1+t)/(1−t)) and sech² = 1 − t², so pdf = a (1 − t²) / (t_max − t_min).
+  // 1 − t² >= 0.05 over 360–830 nm, so float loses nothing that matters.
+  constexpr float kRate = float(kVisibleRate), kCenter = float(kVisibleCenter);
+  const float t_min = float(kTanhMin), t_span = float(kTanhMax - kTanhMin);
   for (int i = 0; i < count; ++i) {
-    w.lambda_[i] = sample_visible_wavelength(stratum(u, i, count));
-    w.pdf_[i] = visible_wavelength_pdf(w.lambda_[i]);
+    const float t = t_min + stratum(u, i, count) * t_span;
+    const float lambda = kCenter + 0.5f * std::log((1.f + t) / (1.f - t)) / kRate;
+    if (lambda >= kLambdaMin && lambda <= kLambdaMax) {
+      w.lambda_[i] = lambda;
+      w.pdf_[i] = kRate * (1.f - t * t) / t_span;
+    } else {  // rounding at the range ends
+      w.lambda_[i] = std::clamp(lambda, kLambdaMin, kLambdaMax);
+      w.pdf_[i] = visible_wavelength_pdf(w.lambda_[i]);
+    }
   }
   return w;
 }

@@ -47,9 +47,18 @@ inline SampledSpectrum carried_lanes(int count) {
 }
 
 // e^{-sigma dt} on the carried lanes, 0 on the others: exp is the costly part
-// of a collision, so lanes nobody reads are skipped.
+// of a collision, so lanes nobody reads are skipped, and a grey sigma (every
+// lane equal: grey media, or majorants of wavelength-independent scatterers)
+// costs one exp instead of count (the cloud benchmark: 11 % of its time in expf).
 inline SampledSpectrum exp_neg_lanes(const SampledSpectrum& sigma, float dt, int count) {
   SampledSpectrum r;
+  bool grey = true;
+  for (int i = 1; i < count; ++i) grey &= sigma[i] == sigma[0];
+  if (grey) {
+    const float e = std::exp(-sigma[0] * dt);
+    for (int i = 0; i < count; ++i) r[i] = e;
+    return r;
+  }
   for (int i = 0; i < count; ++i) r[i] = std::exp(-sigma[i] * dt);
   return r;
 }
