@@ -166,7 +166,16 @@ VoxelGrid VoxelGrid::from_bricks(Coord index_lo, Coord index_hi, float backgroun
 
 VoxelGrid VoxelGrid::from_dense(const DenseGrid& dense, bool clamp_invalid) {
   const Coord lo = dense.origin;
-  const Coord hi{lo[0] + dense.dims[0] - 1, lo[1] + dense.dims[1] - 1, lo[2] + dense.dims[2] - 1};
+  // The last index in int64: origin + dims overflows int for a grid ending at INT_MAX (UBSan).
+  Coord hi;
+  for (int a = 0; a < 3; ++a) {
+    const int64_t last = int64_t(lo[a]) + dense.dims[a] - 1;
+    if (last > std::numeric_limits<int>::max() || last < std::numeric_limits<int>::min())
+      throw InputError("<memory>", "grid", dense.metadata.name,
+                       fmt::format("voxel indices from {} over {} voxels on axis {} leave the int range", lo[a],
+                                   dense.dims[a], a));
+    hi[a] = int(last);
+  }
   if (dense.values.size() != size_t(dense.dims[0]) * dense.dims[1] * dense.dims[2])
     throw InputError("<memory>", "grid", dense.metadata.name,
                      fmt::format("has {} values for {}x{}x{} voxels", dense.values.size(), dense.dims[0],
