@@ -10,7 +10,6 @@
 #include <fstream>
 #include <iterator>
 #include <string>
-#include <string_view>
 #include <typeinfo>
 
 #include <unistd.h>
@@ -49,41 +48,6 @@ inline std::filesystem::path write_input(const std::string& name, const uint8_t*
   return path;
 }
 
-// CHLOROVDB_FUZZ_STRICT=1: also flag the open findings below (and, in fuzz_csv, F3).
-inline bool strict() {
-  static const bool value = std::getenv("CHLOROVDB_FUZZ_STRICT") != nullptr;
-  return value;
-}
-
-// Findings reported in docs/robustness.md whose fix belongs to another module
-// and is still open. Without CHLOROVDB_FUZZ_STRICT they are tolerated (noted
-// once per process), so CI-sized runs keep failing on new bugs only. Delete an
-// entry when its fix lands; the regression inputs in fuzz/crashes/ then hold it.
-struct KnownFinding {
-  const char* id;
-  const char* what_prefix;  // the start of the escaping exception's what()
-};
-inline constexpr KnownFinding kOpenFindings[] = {
-    // A JSON number beyond double range: ParamReader::parse_file (src/scene/param_reader.cpp)
-    // catches nlohmann's parse_error only, so out_of_range.406 leaves load_scene.
-    {"F10", "[json.exception.out_of_range.406]"},
-};
-
-inline bool tolerated_open_finding(const std::exception& e) {
-  if (strict()) return false;
-  const std::string_view what = e.what();
-  for (const KnownFinding& k : kOpenFindings) {
-    if (what.substr(0, std::string_view(k.what_prefix).size()) != k.what_prefix) continue;
-    static bool noted[std::size(kOpenFindings)] = {};
-    if (!noted[&k - kOpenFindings]) {
-      noted[&k - kOpenFindings] = true;
-      std::fprintf(stderr, "\nfuzz: open finding %s (docs/robustness.md) tolerated: %s\n", k.id, e.what());
-    }
-    return true;
-  }
-  return false;
-}
-
 // Runs `body`; InputError is an expected outcome, anything else is a bug.
 template <typename F>
 int run_expecting_input_errors(const char* what, F&& body) {
@@ -92,7 +56,6 @@ int run_expecting_input_errors(const char* what, F&& body) {
   } catch (const InputError&) {
     // Rejected with a message: fine.
   } catch (const std::exception& e) {
-    if (tolerated_open_finding(e)) return 0;
     std::fprintf(stderr, "\n%s: unexpected exception %s: %s\n", what, typeid(e).name(), e.what());
     std::abort();
   } catch (...) {

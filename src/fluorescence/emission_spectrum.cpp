@@ -1,6 +1,9 @@
 #include "fluorescence/emission_spectrum.h"
 
+#include <fmt/format.h>
+
 #include <algorithm>
+#include <cmath>
 #include <stdexcept>
 #include <vector>
 
@@ -9,6 +12,8 @@ namespace chlorovdb {
 Spectrum normalise_emission(const Spectrum& s) {
   // Over the table's whole support, as Pigment validation integrates it.
   const float total = s.integral(std::min(kLambdaMinUV, s.support_min()), std::max(kLambdaMax, s.support_max()));
+  if (!std::isfinite(total))
+    throw std::invalid_argument(fmt::format("emission spectrum {} integrates to {} (values too large)", s.source(), total));
   if (!(total > 0.f)) throw std::invalid_argument("emission spectrum integrates to zero");
   return s.scaled(1.f / total);
 }

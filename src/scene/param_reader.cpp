@@ -25,6 +25,10 @@ ParamReader::ParamReader(const nlohmann::json& object, std::filesystem::path fil
 }
 
 nlohmann::json ParamReader::parse_file(const std::filesystem::path& file) {
+  // A device or pipe (/dev/zero) would be read forever: only regular files are scenes.
+  std::error_code ec;
+  if (std::filesystem::exists(file, ec) && !std::filesystem::is_regular_file(file, ec))
+    throw InputError(file.string(), "", "", "not a regular file");
   std::ifstream in(file);
   if (!in) throw InputError(file.string(), "", "", "cannot open the scene file");
   try {
@@ -41,6 +45,9 @@ nlohmann::json ParamReader::parse_file(const std::filesystem::path& file) {
     }
     throw InputError(fmt::format("{}:{}:{}", file.string(), line, col), "", "",
                      fmt::format("malformed JSON ({})", e.what()));
+  } catch (const nlohmann::json::exception& e) {
+    // e.g. out_of_range.406: a number beyond double range such as 1e400.
+    throw InputError(file.string(), "", "", fmt::format("unreadable JSON ({})", e.what()));
   }
 }
 

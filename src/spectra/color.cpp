@@ -17,26 +17,7 @@ namespace {
 struct CieCmfs {
   Spectrum x, y, z;
   double y_integral;
-  // The same tables for direct indexing (the film looks them up once per lane of
-  // every sample): samples every `step` nm from `lambda0`, 0 if the CSV is not uniform.
-  float lambda0 = 0.f, step = 0.f;
-  std::vector<XYZ> uniform;
 };
-
-// Fills the direct-index copy when the table's wavelengths are evenly spaced.
-void index_uniform_table(CieCmfs& c) {
-  const auto& x = std::get<Spectrum::Tabulated>(c.x.representation());
-  const auto& y = std::get<Spectrum::Tabulated>(c.y.representation());
-  const auto& z = std::get<Spectrum::Tabulated>(c.z.representation());
-  const size_t n = x.lambda.size();
-  if (n < 2 || y.lambda != x.lambda || z.lambda != x.lambda) return;
-  const float step = x.lambda[1] - x.lambda[0];
-  for (size_t i = 1; i < n; ++i)
-    if (std::fabs(x.lambda[i] - x.lambda[0] - float(i) * step) > 1e-4f * step) return;
-  c.lambda0 = x.lambda[0];
-  c.step = step;
-  for (size_t i = 0; i < n; ++i) c.uniform.push_back({x.value[i], y.value[i], z.value[i]});
-}
 
 // Loaded on first use (thread-safe static); a failed load throws and is retried next call.
 const CieCmfs& cmfs() {
@@ -47,7 +28,6 @@ const CieCmfs& cmfs() {
     const auto& y = std::get<Spectrum::Tabulated>(r.y.representation());
     for (size_t i = 0; i + 1 < y.lambda.size(); ++i)
       r.y_integral += 0.5 * (double(y.value[i]) + y.value[i + 1]) * (double(y.lambda[i + 1]) - y.lambda[i]);
-    index_uniform_table(r);
     return r;
   }();
   return c;
@@ -129,15 +109,7 @@ RGB apply(const Mat3& m, const XYZ& c) {
 
 XYZ cie_cmf(float lambda_nm) {
   const CieCmfs& c = cmfs();
-  if (c.uniform.empty()) return {c.x(lambda_nm), c.y(lambda_nm), c.z(lambda_nm)};
-  // Linear interpolation between table rows, zero outside: what Spectrum's tabulated form does.
-  const float u = (lambda_nm - c.lambda0) / c.step;
-  if (!(u >= 0.f) || !(u <= float(c.uniform.size() - 1))) return {};
-  const size_t i = std::min(size_t(u), c.uniform.size() - 2);
-  const double f = u - float(i);
-  const XYZ& a = c.uniform[i];
-  const XYZ& b = c.uniform[i + 1];
-  return {a.x + f * (b.x - a.x), a.y + f * (b.y - a.y), a.z + f * (b.z - a.z)};
+  return {c.x(lambda_nm), c.y(lambda_nm), c.z(lambda_nm)};
 }
 
 double cie_y_integral() { return cmfs().y_integral; }

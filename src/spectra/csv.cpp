@@ -4,6 +4,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <stdexcept>
 #include <fstream>
 #include <limits>
 #include <optional>
@@ -165,7 +166,11 @@ Spectrum load_spectrum_csv(const std::filesystem::path& path, std::string_view c
   const std::string title = table.source.substr(0, table.source.find('\n'));
   std::string source = fmt::format("{} [{}]", path.filename().string(), name);
   if (!title.empty()) source += ": " + title;
-  return Spectrum::tabulated(std::move(lambda), std::move(values), std::move(source));
+  try {
+    return Spectrum::tabulated(std::move(lambda), std::move(values), std::move(source));
+  } catch (const std::invalid_argument& e) {
+    throw InputError(path.string(), "column " + name, "", e.what());
+  }
 }
 
 }  // namespace chlorovdb

@@ -112,6 +112,10 @@ Spectrum Spectrum::tabulated(std::vector<float> lambda, std::vector<float> value
   for (size_t i = 0; i < lambda.size(); ++i) {
     if (!std::isfinite(lambda[i]) || !std::isfinite(value[i]))
       throw std::invalid_argument(fmt::format("tabulated spectrum: sample {} ({} nm, {}) is not finite", i, lambda[i], value[i]));
+    // No spectral quantity is this large, and integrals over a few hundred nm would overflow float.
+    if (std::fabs(value[i]) > kMaxTabulatedValue)
+      throw std::invalid_argument(fmt::format("tabulated spectrum: sample {} ({} nm, {}) is beyond ±{:g}, where its integral "
+                                              "would overflow", i, lambda[i], value[i], kMaxTabulatedValue));
     if (i > 0 && !(lambda[i] > lambda[i - 1]))
       throw std::invalid_argument(fmt::format("tabulated spectrum: wavelengths must increase strictly ({} nm after {} nm)",
                                               lambda[i], lambda[i - 1]));

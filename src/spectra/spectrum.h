@@ -12,6 +12,9 @@
 
 namespace chlorovdb {
 
+// Largest |value| a tabulated spectrum accepts (its integral must stay finite in float).
+inline constexpr float kMaxTabulatedValue = 1e30f;
+
 class Spectrum {
  public:
   struct Constant {

@@ -44,6 +44,33 @@ TEST(SceneErrors, MalformedJsonNamesFileLineAndColumn) {
   EXPECT_NE(msg.find("malformed JSON"), std::string::npos) << msg;
 }
 
+TEST(SceneErrors, NumberBeyondDoubleRangeIsAnInputError) {
+  // Fuzzing finding F10: nlohmann's out_of_range escaped as an internal error.
+  const std::string msg = load_error(scene_with(R"("render": {"spp": 1e400})"), "overflow.json");
+  EXPECT_NE(msg.find("overflow.json"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("1e400"), std::string::npos) << msg;
+}
+
+TEST(SceneErrors, DevicesAreNotSceneFiles) {
+  // Fuzzing finding F1: /dev/zero was read forever.
+  try {
+    load_scene("/dev/zero");
+    ADD_FAILURE() << "no InputError";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("not a regular file"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SceneErrors, SpectrumValuesWhoseIntegralOverflowsAreRefused) {
+  // Fuzzing finding F3: an emission table near FLT_MAX integrated to inf and was
+  // then reported as "zero". Now the table itself is refused, naming the key.
+  const std::string msg = load_error(scene_with(
+      R"("pigments": {"p": {"extinction": 1e4, "quantum_yield": 0.5,
+                            "emission": {"table": {"lambda": [300, 800], "value": [3e38, 3e38]}}}})"));
+  EXPECT_NE(msg.find("pigments.p.emission"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("overflow"), std::string::npos) << msg;
+}
+
 TEST(SceneErrors, UnknownKeySuggestsTheNearestValidOne) {
   const std::string msg = load_error(R"({"camera": {"position": [0, 0, 3], "look_at": [0, 0, 0], "fvo": 30}})");
   EXPECT_NE(msg.find("bad.json"), std::string::npos) << msg;

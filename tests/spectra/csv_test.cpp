@@ -56,6 +56,12 @@ TEST(Csv, ReadsCommentsHeaderAndRows) {
   EXPECT_EQ(load_spectrum_csv(csv.path(), "b")(400.f), 2.f);
 }
 
+TEST(Csv, ValuesWhoseIntegralWouldOverflowAreRefused) {
+  const std::string msg = load_error("huge", std::string(kHeader) + "400,1\n500,3e38\n");
+  EXPECT_NE(msg.find("3e+38"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("overflow"), std::string::npos) << msg;
+}
+
 TEST(Csv, UnsortedWavelengths) {
   const std::string m = load_error("unsorted.csv", std::string(kHeader) + "400,1\n420,1\n410,1\n");
   EXPECT_NE(m.find("line 5"), std::string::npos) << m;
