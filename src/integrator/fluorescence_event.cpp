@@ -223,11 +223,15 @@ SampledSpectrum reference_fluorescence_event(const Scene& scene, const Vec3& p, 
       sample_Li(light, LightSampleContext{p, Vec3{}}, Point2{rng.uniform(), rng.uniform()}, wl, scene.geometry);
   if (!ls || ls->L.is_black() || !(ls->pdf > 0.f)) return {};
   ++stats.excitation_rays;
-  // One free-path test toward the light: a 0/1 transmittance estimate.
+  // One free-path test toward the light: a 0/1 transmittance estimate. "An opaque
+  // surface" stops it (thesis Ch. 4); glass does not, or a solution in a glass would
+  // never fluoresce, unlike the thesis's own images: it crosses as our estimators'
+  // excitation rays do (render.excitation_through_glass).
   PreparedMedia media(scene, wl);
-  const SampledSpectrum T =
-      trace_transmittance(scene, ShadowOrigin{p, medium, nullptr}, ls->wi, ls->p_light, ls->is_infinite, media, rng,
-                          DielectricCrossing::block, TransmittanceEstimator::delta);
+  const DielectricCrossing glass =
+      scene.settings.excitation_through_glass ? DielectricCrossing::straight_through_fresnel : DielectricCrossing::block;
+  const SampledSpectrum T = trace_transmittance(scene, ShadowOrigin{p, medium, nullptr}, ls->wi, ls->p_light,
+                                                ls->is_infinite, media, rng, glass, TransmittanceEstimator::delta);
   if (T[0] == 0.f) return {};
   const SampledSpectrum f = fp.emission.sample(lambda);
   return beta * f * (ls->L[0] * T[0] / (ls->pdf * pick_pmf));
