@@ -1,6 +1,13 @@
 #!/usr/bin/env bash
 # Installs the Debian 12 packages chlorovdb builds with, only if any is missing.
 # Needs root (or sudo) when something must be installed; says so clearly otherwise.
+#
+#   tools/install-deps.sh [mpi] [python] [fuzz]
+#
+# The optional builds' packages come only when their group is named:
+#   mpi     libopenmpi-dev openmpi-bin                 (-DCHLOROVDB_MPI=ON, docs/distributed.md)
+#   python  pybind11-dev python3-dev python3-numpy     (-DCHLOROVDB_PYTHON=ON, docs/python.md)
+#   fuzz    clang libclang-rt-dev                      (fuzz targets, sanitizer build: docs/robustness.md)
 set -euo pipefail
 
 packages=(
@@ -9,6 +16,14 @@ packages=(
   libopenexr-dev libimath-dev libtbb-dev libboost-dev libboost-iostreams-dev
   libassimp-dev nlohmann-json3-dev libcli11-dev libfmt-dev libgtest-dev libbenchmark-dev
 )
+for group in "$@"; do
+  case "$group" in
+    mpi) packages+=(libopenmpi-dev openmpi-bin) ;;
+    python) packages+=(pybind11-dev python3-dev python3-numpy) ;;
+    fuzz) packages+=(clang libclang-rt-dev) ;;
+    *) echo "install-deps.sh: unknown group '$group' (mpi, python, fuzz)" >&2; exit 2 ;;
+  esac
+done
 
 missing=()
 for p in "${packages[@]}"; do
