@@ -28,6 +28,31 @@ TEST(EmissionSpectrum, GaussianIsNormalised) {
   EXPECT_GT(g(685.f), g(680.f));
 }
 
+namespace {
+
+// Draws n samples of λ' and checks each lies in the sampler's support with the pdf it
+// reports, and that the estimate of ∫ S ε λ' is unbiased within 4σ.
+void expect_unbiased_excitation(const ExcitationSampler& sampler, const Spectrum& light, const Spectrum& eps, int n,
+                                uint64_t seed) {
+  Rng rng(seed, 0);
+  double sum = 0, sum2 = 0;
+  for (int i = 0; i < n; ++i) {
+    float pdf;
+    const float l = sampler.sample(rng.uniform(), &pdf);
+    ASSERT_GT(pdf, 0.f);
+    ASSERT_GE(l, sampler.support_min());
+    ASSERT_LT(l, sampler.support_max());
+    ASSERT_FLOAT_EQ(pdf, sampler.pdf(l));
+    const double g = double(light(l)) * eps(l) * l / pdf;
+    sum += g;
+    sum2 += g * g;
+  }
+  const double mean = sum / n, sigma = std::sqrt((sum2 / n - mean * mean) / n);
+  EXPECT_NEAR(mean, sampler.total(), 4 * sigma + 1e-3 * sampler.total());
+}
+
+}  // namespace
+
 TEST(ExcitationSampler, EstimatesItsOwnIntegralAndPdfMatchesSamples) {
   const Spectrum light = named_spectrum("F2");
   const Spectrum eps = named_spectrum("chlorophyll_a");
@@ -38,20 +63,7 @@ TEST(ExcitationSampler, EstimatesItsOwnIntegralAndPdfMatchesSamples) {
   for (float l = kLambdaMinUV; l < kLambdaMax; l += 0.05f) integral += sampler.pdf(l + 0.025f) * 0.05;
   EXPECT_NEAR(integral, 1.0, 1e-3);
   // Importance sampling estimate of ∫ S ε λ: unbiased within 4σ.
-  Rng rng(7, 0);
-  const int n = 200000;
-  double sum = 0, sum2 = 0;
-  for (int i = 0; i < n; ++i) {
-    float pdf;
-    const float l = sampler.sample(rng.uniform(), &pdf);
-    ASSERT_GT(pdf, 0.f);
-    ASSERT_FLOAT_EQ(pdf, sampler.pdf(l));
-    const double g = double(light(l)) * eps(l) * l / pdf;
-    sum += g;
-    sum2 += g * g;
-  }
-  const double mean = sum / n, sigma = std::sqrt((sum2 / n - mean * mean) / n);
-  EXPECT_NEAR(mean, sampler.total(), 4 * sigma + 1e-3 * sampler.total());
+  expect_unbiased_excitation(sampler, light, eps, 200000, 7);
 }
 
 TEST(ExcitationSampler, UniformModePdfIntegratesToOneOverTheImportanceSupport) {
@@ -78,26 +90,12 @@ TEST(ExcitationSampler, UniformModePdfIntegratesToOneOverTheImportanceSupport) {
   EXPECT_EQ(uniform.pdf(uniform.support_min() - 0.01f), 0.f);
   EXPECT_EQ(uniform.pdf(uniform.support_max()), 0.f);
   // Samples stay inside, carry the pdf, and estimate ∫ S ε λ without bias.
-  Rng rng(11, 0);
-  const int n = 400000;
-  double sum = 0, sum2 = 0;
-  for (int i = 0; i < n; ++i) {
-    float pdf;
-    const float l = uniform.sample(rng.uniform(), &pdf);
-    ASSERT_GE(l, uniform.support_min());
-    ASSERT_LT(l, uniform.support_max());
-    ASSERT_EQ(pdf, uniform.pdf(l));
-    const double g = double(light(l)) * eps(l) * l / pdf;
-    sum += g;
-    sum2 += g * g;
-  }
+  expect_unbiased_excitation(uniform, light, eps, 400000, 11);
   for (float u : {0.f, 0.99999994f}) {
     float pdf;
     const float l = uniform.sample(u, &pdf);
     EXPECT_EQ(pdf, uniform.pdf(l)) << u;
   }
-  const double mean = sum / n, sigma = std::sqrt((sum2 / n - mean * mean) / n);
-  EXPECT_NEAR(mean, uniform.total(), 4 * sigma + 1e-3 * uniform.total());
 }
 
 TEST(ExcitationSampler, LightDarkWhereThePigmentAbsorbsCannotExcite) {
