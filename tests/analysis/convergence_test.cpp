@@ -3,6 +3,7 @@
 // log-log slope of -1/2 +- 0.1 and the mean shows no bias at 4 sigma.
 // Each pixel of the 16x16 image is an independent replicate of the same exact
 // value, so one progressive render gives both the RMSE and its standard error.
+#include "scratch_dir.h"
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -25,7 +26,7 @@ struct Outcome {
 
 Outcome converge(SlabCase slab, const std::string& tag) {
   slab.name += "_" + tag;
-  const auto dir = std::filesystem::temp_directory_path() / "chlorovdb_analysis_tests";
+  const auto dir = chlorovdb::test::scratch_dir("analysis_tests");
   const Scene scene = load_scene(write_slab_scene(slab, dir));
   const Image truth = slab_reference_image(slab, scene);
   ConvergenceOptions o;
@@ -96,7 +97,7 @@ TEST(AnalyticSlab, QuadratureMatchesTheClosedFormForAUniformSlab) {
   // The depth quadrature (used for graded slabs) must reproduce PHYSICS.md §7's closed form:
   // L = Q f(l) / (4 pi l) * int l' E(l') dl' * mu_a (1 - e^{-(zeta + zeta + mu_a) D}) / (zeta + zeta + mu_a).
   const SlabCase slab = analytic_case("slab");
-  const auto dir = std::filesystem::temp_directory_path() / "chlorovdb_analysis_tests";
+  const auto dir = chlorovdb::test::scratch_dir("analysis_tests");
   const Scene scene = load_scene(write_slab_scene(slab, dir));
   const double mu_a = 100 * std::log(10.0) * slab.epsilon * slab.c_lit * 1e-6;
   const Pigment& p = scene.media[0].desc().pigments[0].pigment;

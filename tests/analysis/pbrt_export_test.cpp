@@ -1,4 +1,5 @@
 // export-pbrt: the text has pbrt-v4's structure and the right counts.
+#include "scratch_dir.h"
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -15,7 +16,7 @@ using namespace chlorovdb;
 namespace {
 
 std::filesystem::path write(const std::string& name, const std::string& json) {
-  const auto dir = std::filesystem::temp_directory_path() / "chlorovdb_analysis_tests";
+  const auto dir = chlorovdb::test::scratch_dir("analysis_tests");
   std::filesystem::create_directories(dir);
   const auto path = dir / name;
   std::ofstream(path) << json;
@@ -124,7 +125,7 @@ TEST(PbrtExport, SmallSceneHasPbrtStructureAndCounts) {
 TEST(PbrtExport, RefusesFluorescenceUnlessIgnoredAndDumpsGrids) {
   SlabCase slab = analytic_case("slab_linear");
   slab.name = "pbrt_export_grid";
-  const auto dir = std::filesystem::temp_directory_path() / "chlorovdb_analysis_tests";
+  const auto dir = chlorovdb::test::scratch_dir("analysis_tests");
   const auto file = write_slab_scene(slab, dir);
   const Scene scene = load_scene(file);
   EXPECT_THROW(export_pbrt(scene, file, {}), InputError);

@@ -1,5 +1,6 @@
 // A reference interrupted at k samples, written to EXR, read back and resumed
 // equals an uninterrupted render of the same samples up to float rounding.
+#include "scratch_dir.h"
 #include <gtest/gtest.h>
 
 #include <atomic>
@@ -17,7 +18,7 @@ TEST(Reference, InterruptedThenResumedEqualsUninterrupted) {
   SlabCase slab = analytic_case("slab_linear");
   slab.name = "reference_resume";
   slab.resolution = 8;
-  const auto dir = std::filesystem::temp_directory_path() / "chlorovdb_analysis_tests";
+  const auto dir = chlorovdb::test::scratch_dir("analysis_tests");
   const Scene scene = load_scene(write_slab_scene(slab, dir));
   const int total = 40;
 

@@ -1,5 +1,6 @@
 // Round trips through real .vdb files. OpenVDB itself is included only to
 // write a grid of the wrong type, which write_concentration_grid cannot make.
+#include "scratch_dir.h"
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -18,9 +19,7 @@ using namespace chlorovdb;
 namespace {
 
 std::filesystem::path temp_path(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / "chlorovdb_test_grids";
-  std::filesystem::create_directories(dir);
-  return dir / name;
+  return test::scratch_dir("test_grids") / name;
 }
 
 DenseGrid test_grid(const std::string& name) {

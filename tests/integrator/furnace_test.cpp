@@ -1,6 +1,7 @@
 // Furnace tests: in a uniform environment of radiance 1, a non-absorbing object
 // (albedo-1 diffuse sphere, or a pure scatterer) is invisible: every path
 // estimates exactly radiance 1 in expectation, at every wavelength.
+#include "scratch_dir.h"
 #include <gtest/gtest.h>
 
 #include "grids/vdb_file.h"
@@ -155,8 +156,7 @@ TEST(Furnace, HeterogeneousGridScattererWithNullCollisions) {
       for (int x = 0; x < 16; ++x) g.at(x, y, z) = float((x * 7 + y * 13 + z * 5) % 16) / 15.f;
   g.world_from_index = Transform::translate(Vec3(-1.f + 1.f / 16)) * Transform::scale(Vec3(2.f / 16));
   g.metadata.name = "density";
-  const auto vdb = std::filesystem::temp_directory_path() / "chlorovdb_integrator_tests" / "furnace_grid.vdb";
-  std::filesystem::create_directories(vdb.parent_path());
+  const auto vdb = scratch_dir("integrator_tests") / "furnace_grid.vdb";
   write_concentration_grid(vdb, g);
   const Scene scene = load_scene(write_scene("furnace_grid", R"({
     "render": {"resolution": [8, 8], "max_depth": 100000, "wavelengths": 8},

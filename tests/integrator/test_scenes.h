@@ -1,5 +1,6 @@
 #pragma once
 // Scenes for integrator tests, written as JSON so the loader is exercised too.
+#include "scratch_dir.h"
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -13,9 +14,7 @@
 namespace chlorovdb::test {
 
 inline std::filesystem::path write_scene(const std::string& name, const std::string& json) {
-  const auto dir = std::filesystem::temp_directory_path() / "chlorovdb_integrator_tests";
-  std::filesystem::create_directories(dir);
-  const auto path = dir / (name + ".json");
+  const auto path = scratch_dir("integrator_tests") / (name + ".json");
   std::ofstream(path) << json;
   return path;
 }

@@ -1,5 +1,6 @@
 // Bad scene files give one clear error naming the file, the key path and the
 // value (and the nearest valid key or name), never a crash or a silent default.
+#include "scratch_dir.h"
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -13,9 +14,7 @@ using namespace chlorovdb;
 namespace {
 
 std::filesystem::path write(const std::string& name, const std::string& text) {
-  const auto dir = std::filesystem::temp_directory_path() / "chlorovdb_scene_tests";
-  std::filesystem::create_directories(dir);
-  const auto path = dir / name;
+  const auto path = test::scratch_dir("scene_tests") / name;
   std::ofstream(path) << text;
   return path;
 }

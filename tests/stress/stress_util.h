@@ -8,6 +8,7 @@
 //      renderer drops and counts them, so a non-zero count is a bug upstream of
 //      the film) and every value of every image layer finite;
 //   3. stay within an energy bound (luminance_bound below) where one exists.
+#include "scratch_dir.h"
 #include <atomic>
 #include <chrono>
 #include <cmath>
@@ -89,11 +90,7 @@ class Watchdog {
   std::thread thread_;
 };
 
-inline std::filesystem::path scratch_dir() {
-  const auto dir = std::filesystem::temp_directory_path() / "chlorovdb_stress_tests";
-  std::filesystem::create_directories(dir);
-  return dir;
-}
+inline std::filesystem::path scratch_dir() { return test::scratch_dir("stress_tests"); }
 
 inline std::filesystem::path write_scene(const std::string& name, const std::string& json) {
   const auto path = scratch_dir() / (name + ".json");

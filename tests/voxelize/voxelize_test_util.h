@@ -1,6 +1,7 @@
 #pragma once
 // Shared helpers of the voxelize tests: temporary files, OBJ writing and grid integrals.
 // Grids are read back with load_concentration_grid, so the tests never include OpenVDB.
+#include "scratch_dir.h"
 #include <gtest/gtest.h>
 
 #include <filesystem>
@@ -17,9 +18,7 @@
 namespace chlorovdb::test {
 
 inline std::filesystem::path temp_path(const std::string& name) {
-  const auto dir = std::filesystem::temp_directory_path() / "chlorovdb_test_voxelize";
-  std::filesystem::create_directories(dir);
-  return dir / name;
+  return scratch_dir("test_voxelize") / name;
 }
 
 inline std::filesystem::path write_obj(const TriangleMesh& mesh, const std::string& name) {
