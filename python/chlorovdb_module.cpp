@@ -34,16 +34,6 @@ using namespace chlorovdb;
 
 namespace {
 
-const char* mode_name(FluorescenceMode m) {
-  switch (m) {
-    case FluorescenceMode::off: return "off";
-    case FluorescenceMode::direct: return "direct";
-    case FluorescenceMode::full: return "full";
-    case FluorescenceMode::reference: return "reference";
-  }
-  return "?";
-}
-
 // A copy of interleaved floats as a C-contiguous float32 array of `shape`.
 py::array_t<float> to_array(const std::vector<float>& values, std::vector<py::ssize_t> shape) {
   py::array_t<float> a(shape);
@@ -132,7 +122,7 @@ RenderResult render_scene(const Scene& scene, std::optional<int> spp, int thread
   r.paths = stats.paths;
   for (const auto& [key, value] : image.metadata.entries) r.metadata[py::str(key)] = metadata_value(value);
   r.metadata["seed"] = ro.seed;
-  r.metadata["fluorescence"] = mode_name(s.fluorescence);
+  r.metadata["fluorescence"] = to_string(s.fluorescence);
   return r;
 }
 
@@ -252,9 +242,8 @@ VoxelizeOptions voxelize_options(py::object voxel_size, const std::string& mode,
   o.voxel_size = voxel_size_from(voxel_size, "voxelize()");
   o.thickness = thickness;
   o.depth = depth;
-  if (spill_direction == "normal") o.spill_direction = SpillDirection::normal;
-  else if (spill_direction == "up") o.spill_direction = SpillDirection::up;
-  else throw InputError("voxelize()", "spill_direction", spill_direction, "must be \"normal\" or \"up\"");
+  if (!parse_spill_direction(spill_direction, &o.spill_direction))
+    throw InputError("voxelize()", "spill_direction", spill_direction, "must be \"normal\" or \"up\"");
   o.unit = unit;
   o.grid_name = grid_name;
   ConcentrationProfile& p = o.profile;
@@ -269,9 +258,8 @@ VoxelizeOptions voxelize_options(py::object voxel_size, const std::string& mode,
   p.noise_amplitude = noise_amplitude;
   p.noise_octaves = noise_octaves;
   p.falloff_length = falloff_length;
-  if (falloff_shape == "decay") p.falloff_shape = FalloffShape::decay;
-  else if (falloff_shape == "rise") p.falloff_shape = FalloffShape::rise;
-  else throw InputError("voxelize()", "falloff_shape", falloff_shape, "must be \"decay\" or \"rise\"");
+  if (!parse_falloff_shape(falloff_shape, &p.falloff_shape))
+    throw InputError("voxelize()", "falloff_shape", falloff_shape, "must be \"decay\" or \"rise\"");
   p.grid_file = profile_grid;
   p.grid_name = profile_grid_name;
   o.memory_limit_bytes = memory_limit_bytes;
@@ -345,7 +333,7 @@ PYBIND11_MODULE(chlorovdb, m) {
       .def_property_readonly("spectral_bins", [](const Scene& s) { return s.settings.spectral_bins; })
       .def_property_readonly("color_space",
                              [](const Scene& s) { return s.settings.color_space == ColorSpace::sRGB ? "srgb" : "acescg"; })
-      .def_property_readonly("fluorescence", [](const Scene& s) { return mode_name(s.settings.fluorescence); })
+      .def_property_readonly("fluorescence", [](const Scene& s) { return to_string(s.settings.fluorescence); })
       .def_property_readonly("fluorescence_reason", [](const Scene& s) { return s.settings.fluorescence_reason; })
       .def_property_readonly("has_fluorescence", &Scene::has_fluorescence)
       .def_property_readonly("media", [](const Scene& s) { return s.medium_names; })

@@ -39,16 +39,6 @@ struct ReferenceArgs {
   bool quiet = false;
 };
 
-const char* fluorescence_name(FluorescenceMode m) {
-  switch (m) {
-    case FluorescenceMode::off: return "off";
-    case FluorescenceMode::direct: return "direct";
-    case FluorescenceMode::full: return "full";
-    case FluorescenceMode::reference: return "reference";
-  }
-  return "?";
-}
-
 // What must agree between a partial reference and the run that resumes it.
 Metadata settings_metadata(const Scene& scene, const ReferenceArgs& a) {
   const RenderSettings& s = scene.settings;
@@ -57,7 +47,7 @@ Metadata settings_metadata(const Scene& scene, const ReferenceArgs& a) {
   m.set("resolution", fmt::format("{}x{}", s.width, s.height));
   m.set("wavelengths_per_path", s.wavelengths);
   m.set("max_depth", s.max_depth);
-  m.set("fluorescence", fluorescence_name(s.fluorescence));
+  m.set("fluorescence", to_string(s.fluorescence));
   m.set("transmittance", s.transmittance_auto ? "auto" : to_string(s.transmittance));
   // Written only when given: EXR drops empty string attributes (a missing key reads as "").
   std::string sets;

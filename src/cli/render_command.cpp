@@ -55,16 +55,6 @@ void parse_resolution(const std::string& s, SceneOverrides& o) {
   o.height = h;
 }
 
-const char* mode_name(FluorescenceMode m) {
-  switch (m) {
-    case FluorescenceMode::off: return "off";
-    case FluorescenceMode::direct: return "direct";
-    case FluorescenceMode::full: return "full";
-    case FluorescenceMode::reference: return "reference";
-  }
-  return "?";
-}
-
 struct RenderArgs {
   std::filesystem::path scene;
   std::filesystem::path output;  // .exr; the PNG preview goes beside it
@@ -142,7 +132,7 @@ Signature make_signature(const RenderArgs& a, const Scene& scene) {
       {"seed", std::to_string(s.seed)},
       {"wavelengths", std::to_string(s.wavelengths)},
       {"max_depth", std::to_string(s.max_depth)},
-      {"fluorescence", mode_name(s.fluorescence)},
+      {"fluorescence", to_string(s.fluorescence)},
       {"transmittance", s.transmittance_auto ? std::string("auto") : std::string(to_string(s.transmittance))},
       {"color_space", s.color_space == ColorSpace::sRGB ? "sRGB" : "ACEScg"},
       {"spectral_bins", std::to_string(s.spectral_bins)},
@@ -239,7 +229,7 @@ int render(const RenderArgs& a) {
   }
 
   if (root && scene.has_fluorescence())
-    fmt::print(stderr, "fluorescence: {} ({})\n", mode_name(s.fluorescence), s.fluorescence_reason);
+    fmt::print(stderr, "fluorescence: {} ({})\n", to_string(s.fluorescence), s.fluorescence_reason);
 
   const auto session_start = std::chrono::steady_clock::now();
   auto session_seconds = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - session_start).count(); };
@@ -334,7 +324,7 @@ int render(const RenderArgs& a) {
   image.metadata.set("version", CHLOROVDB_VERSION);
   image.metadata.set("scene", std::filesystem::absolute(a.scene).string());
   image.metadata.set("wavelengths_per_path", s.wavelengths);
-  image.metadata.set("fluorescence", mode_name(s.fluorescence));
+  image.metadata.set("fluorescence", to_string(s.fluorescence));
   image.metadata.set("interrupted", interrupted ? 1 : 0);
   image.metadata.set("nonfinite_samples", double(nonfinite));  // including sessions before a resume
   if (resumed_at > 0) image.metadata.set("resumed_at_spp", resumed_at);

@@ -20,6 +20,16 @@
 namespace chlorovdb {
 
 enum class FluorescenceMode { off, direct, full, reference };
+// The scene-file keyword of a mode ("off", "direct", "full", "reference").
+inline const char* to_string(FluorescenceMode m) {
+  switch (m) {
+    case FluorescenceMode::off: return "off";
+    case FluorescenceMode::direct: return "direct";
+    case FluorescenceMode::full: return "full";
+    case FluorescenceMode::reference: return "reference";
+  }
+  return "?";
+}
 // The quantum yield Q of an event in `direct`/`full` mode: a factor on its
 // contribution, or a roulette (fluorescence with probability Q, weight 1).
 enum class QuantumYieldMode { weight, roulette };

@@ -54,6 +54,15 @@ std::string_view to_string(ProfileKind kind) {
 
 std::string_view to_string(FalloffShape shape) { return shape == FalloffShape::decay ? "decay" : "rise"; }
 
+bool parse_falloff_shape(std::string_view word, FalloffShape* shape) {
+  for (FalloffShape s : {FalloffShape::decay, FalloffShape::rise})
+    if (word == to_string(s)) {
+      *shape = s;
+      return true;
+    }
+  return false;
+}
+
 double molar_per_unit(std::string_view unit) {
   if (unit == "M" || unit == "mol/L") return 1.0;
   if (unit == "mM") return 1e-3;

@@ -44,6 +44,7 @@ struct ConcentrationProfile {
 bool parse_profile_kind(std::string_view word, ProfileKind* kind);
 std::string_view to_string(ProfileKind kind);
 std::string_view to_string(FalloffShape shape);
+bool parse_falloff_shape(std::string_view word, FalloffShape* shape);  // "decay" | "rise"
 
 // Factor from a concentration unit to mol/L ("M" = "mol/L", "mM", "uM" = "µM", "nM"); 0 if unknown.
 double molar_per_unit(std::string_view unit);

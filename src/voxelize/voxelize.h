@@ -146,6 +146,8 @@ std::string describe_options(const VoxelizeOptions& options, const ProfileSample
 
 std::string_view to_string(VoxelizeMode mode);
 bool parse_voxelize_mode(std::string_view word, VoxelizeMode* mode);
+std::string_view to_string(SpillDirection direction);
+bool parse_spill_direction(std::string_view word, SpillDirection* direction);  // "normal" | "up"
 
 namespace detail {
 

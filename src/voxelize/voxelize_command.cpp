@@ -64,9 +64,8 @@ VoxelizeOptions voxelize_options(const VoxelizeArgs& a) {
     throw InputError(kCommand, "--depth", fmt::format("{}", *a.depth), "only applies to --mode spill");
   o.thickness = a.thickness.value_or(0.f);
   o.depth = a.depth.value_or(0.f);
-  if (a.direction == "normal") o.spill_direction = SpillDirection::normal;
-  else if (a.direction == "up") o.spill_direction = SpillDirection::up;
-  else throw InputError(kCommand, "--direction", a.direction, "must be normal or up");
+  if (!parse_spill_direction(a.direction, &o.spill_direction))
+    throw InputError(kCommand, "--direction", a.direction, "must be normal or up");
   o.height_field_cell = a.cell_size.value_or(0.f);
 
   ConcentrationProfile& p = o.profile;
@@ -92,9 +91,8 @@ VoxelizeOptions voxelize_options(const VoxelizeArgs& a) {
   if (p.kind == ProfileKind::falloff && !a.falloff_length)
     throw InputError(kCommand, "--falloff-length", "", "--profile falloff needs a length scale in metres");
   p.falloff_length = a.falloff_length.value_or(0.f);
-  if (a.falloff_shape == "decay") p.falloff_shape = FalloffShape::decay;
-  else if (a.falloff_shape == "rise") p.falloff_shape = FalloffShape::rise;
-  else throw InputError(kCommand, "--falloff-shape", a.falloff_shape, "must be decay or rise");
+  if (!parse_falloff_shape(a.falloff_shape, &p.falloff_shape))
+    throw InputError(kCommand, "--falloff-shape", a.falloff_shape, "must be decay or rise");
   p.grid_file = a.source_grid;
   p.grid_name = a.source_grid_name;
   o.unit = a.unit;

@@ -49,6 +49,17 @@ bool parse_voxelize_mode(std::string_view word, VoxelizeMode* mode) {
   return false;
 }
 
+std::string_view to_string(SpillDirection direction) { return direction == SpillDirection::normal ? "normal" : "up"; }
+
+bool parse_spill_direction(std::string_view word, SpillDirection* direction) {
+  for (SpillDirection d : {SpillDirection::normal, SpillDirection::up})
+    if (word == to_string(d)) {
+      *direction = d;
+      return true;
+    }
+  return false;
+}
+
 void validate_options(const VoxelizeOptions& o) {
   const std::string source = source_of(o);
   const Vec3 h = o.voxel_size;
@@ -77,7 +88,7 @@ std::string describe_options(const VoxelizeOptions& o, const ProfileSampler& pro
   if (o.mode == VoxelizeMode::shell) s += fmt::format(" --thickness {}", o.thickness);
   if (o.mode == VoxelizeMode::spill)
     s += fmt::format(" --depth {} --direction {}", o.depth,
-                     o.spill_direction == SpillDirection::normal ? "normal" : "up");
+                     to_string(o.spill_direction));
   if (o.height_field_cell > 0.f) s += fmt::format(" --cell-size {}", o.height_field_cell);
   s += fmt::format(" {} --unit {} --grid-name {}", profile.describe(), o.unit, o.grid_name);
   if (!o.world_from_input.is_identity()) {
