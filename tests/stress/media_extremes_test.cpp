@@ -11,29 +11,6 @@ using namespace chlorovdb::stress;
 
 namespace {
 
-// Decadic molar extinction of the test dye, flat over the whole range (so it
-// absorbs its own emission: absorption and emission overlap everywhere).
-constexpr double kEpsilon = 1e4;                           // L mol^-1 cm^-1
-constexpr double kSigmaPerMolar = 100 * 2.302585 * kEpsilon;  // 1/m per mol/L (PHYSICS.md §1)
-
-// A 1 m cube of dye (index-matched), a grey floor, a white environment.
-const char* kDyeCube = R"({
-  "render": {"resolution": [8, 8], "wavelengths": 4, "fluorescence": "$MODE", "max_depth": 16},
-  "camera": {"position": [0.4, 0.6, 3], "look_at": [0, 0, 0], "fov": 40},
-  "pigments": {"dye": {"extinction": {"table": {"lambda": [250, 830], "value": [$EPS, $EPS]}},
-                       "quantum_yield": $Q, "emission": {"gaussian": [650, 20]}}},
-  "materials": {"boundary": {"type": "interface"}, "floor": {"type": "diffuse", "albedo": 0.8}},
-  "media": {"dye": {"solvent": "none", "pigments": [{"pigment": "dye", $FIELD}] $SCATTER}},
-  "shapes": [{"type": "box", "min": [-0.5, -0.5, -0.5], "max": [0.5, 0.5, 0.5], "material": "boundary", "inside": "dye"},
-             {"type": "quad", "corner": [-3, -0.5, -3], "edge_u": [0, 0, 6], "edge_v": [6, 0, 0], "material": "floor"}],
-  "lights": [{"type": "environment", "spectrum": 1}]
-})";
-
-std::string dye_cube(const std::string& field, double Q, const std::string& mode, const std::string& scatter = "") {
-  return subst(kDyeCube, {{"$MODE", mode}, {"$EPS", num(kEpsilon)}, {"$Q", num(Q)}, {"$FIELD", field},
-                          {"$SCATTER", scatter}});
-}
-
 std::string homogeneous_field(double molar) { return "\"concentration\": " + num(molar) + ", \"unit\": \"M\""; }
 
 // 8^3 checkerboard (0 / c_max) filling the cube: trilinear lookups vary between

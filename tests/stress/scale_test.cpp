@@ -20,8 +20,6 @@ std::string sanitize(std::string s) {
   return s;
 }
 
-constexpr double kSigmaPerMolar = 100 * 2.302585 * 1e4;  // flat ε = 1e4 L/mol/cm
-
 // An 8^3 grid of a smooth blob (peak at the centre, 0 at the corners) with voxel
 // size h, placed with its index origin at `index_origin` and its world origin at
 // `offset`, scaled so the optical depth through the centre is about `tau`.

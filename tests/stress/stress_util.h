@@ -113,6 +113,38 @@ inline std::string num(double v) {
   return buf;
 }
 
+// The stress suite's test dye: decadic molar extinction flat over the whole range
+// (so it absorbs its own emission: absorption and emission overlap everywhere).
+inline constexpr double kDyeEpsilon = 1e4;                              // L mol^-1 cm^-1
+inline constexpr double kSigmaPerMolar = 100 * 2.302585 * kDyeEpsilon;  // 1/m per mol/L (PHYSICS.md §1)
+
+// Image size, wavelengths per path and path depth of a dye_cube render.
+struct DyeCubeRender {
+  int resolution = 8;
+  int wavelengths = 4;
+  int max_depth = 16;
+};
+
+// A 1 m cube of the dye (index-matched) holding `field` (the pigment entry's concentration
+// or grid), a grey floor, a white environment.
+inline std::string dye_cube(const std::string& field, double Q, const std::string& mode, const std::string& scatter = "",
+                            DyeCubeRender r = {}) {
+  return subst(R"({
+  "render": {"resolution": [$RES, $RES], "wavelengths": $WL, "fluorescence": "$MODE", "max_depth": $DEPTH},
+  "camera": {"position": [0.4, 0.6, 3], "look_at": [0, 0, 0], "fov": 40},
+  "pigments": {"dye": {"extinction": {"table": {"lambda": [250, 830], "value": [$EPS, $EPS]}},
+                       "quantum_yield": $Q, "emission": {"gaussian": [650, 20]}}},
+  "materials": {"boundary": {"type": "interface"}, "floor": {"type": "diffuse", "albedo": 0.8}},
+  "media": {"dye": {"solvent": "none", "pigments": [{"pigment": "dye", $FIELD}] $SCATTER}},
+  "shapes": [{"type": "box", "min": [-0.5, -0.5, -0.5], "max": [0.5, 0.5, 0.5], "material": "boundary", "inside": "dye"},
+             {"type": "quad", "corner": [-3, -0.5, -3], "edge_u": [0, 0, 6], "edge_v": [6, 0, 0], "material": "floor"}],
+  "lights": [{"type": "environment", "spectrum": 1}]
+})",
+               {{"$RES", std::to_string(r.resolution)}, {"$WL", std::to_string(r.wavelengths)},
+                {"$DEPTH", std::to_string(r.max_depth)}, {"$MODE", mode}, {"$EPS", num(kDyeEpsilon)},
+                {"$Q", num(Q)}, {"$FIELD", field}, {"$SCATTER", scatter}});
+}
+
 // ---------------------------------------------------------------------------
 // Energy bound.
 //

@@ -99,6 +99,8 @@ fi
 
 # key VALUE from cloud_compare's output
 get() { awk -v k="$1" '$1 == k { print $2 }' <<<"$2"; }
+# The last render's CPU time without start-up, per thread: its wall time on idle cores.
+cpu_per_thread() { awk -v c="$CPU_S" -v s="$STARTUP" -v n="$THREADS" 'BEGIN { print (c - s) / n }'; }
 median() { tr ' ' '\n' <<<"$*" | grep -v '^$' | sort -g | awk '{ a[NR] = $1 } END { print (NR % 2) ? a[(NR + 1) / 2] : (a[NR / 2] + a[NR / 2 + 1]) / 2 }'; }
 
 # render SCENE SPP SEED OUTFILE [extra options]: sets CPU_S to the process's user+sys seconds.
@@ -154,7 +156,7 @@ for spp in $SPPS; do
     render "$ROOT/scenes/bench/cloud.json" "$spp" "$seed" "$f"
     R="$("$COMPARE" "$REF" "$f")"
     times+=" $(get time_s "$R")"
-    cpus+=" $(awk -v c="$CPU_S" -v s="$STARTUP" -v n="$THREADS" 'BEGIN { print (c - s) / n }')"
+    cpus+=" $(cpu_per_thread)"
     rmses+=" $(get rmse "$R")"
   done
   t="$(median $times)"; c="$(median $cpus)"; r="$(median $rmses)"
@@ -174,7 +176,7 @@ spp100="$(awk '{ print $NF }' <<<"$SPPS")"
 cpus=""
 for seed in $SEEDS; do
   render "$ROOT/scenes/bench/cloud_tau100.json" "$spp100" "$seed" "$OUT/cloud_tau100_${spp100}spp_seed${seed}.exr"
-  cpus+=" $(awk -v c="$CPU_S" -v s="$STARTUP" -v n="$THREADS" 'BEGIN { print (c - s) / n }')"
+  cpus+=" $(cpu_per_thread)"
 done
 t100="$(median $cpus)"
 t10="${CPU10[$spp100]:-}"
@@ -182,7 +184,7 @@ if [[ -z "$t10" ]]; then
   cpus=""
   for seed in $SEEDS; do
     render "$ROOT/scenes/bench/cloud.json" "$spp100" "$seed" "$OUT/cloud_${spp100}spp_seed${seed}.exr"
-    cpus+=" $(awk -v c="$CPU_S" -v s="$STARTUP" -v n="$THREADS" 'BEGIN { print (c - s) / n }')"
+    cpus+=" $(cpu_per_thread)"
   done
   t10="$(median $cpus)"
 fi
@@ -206,7 +208,7 @@ for spp in $SPPS; do
     render "$ROOT/scenes/bench/cloud_chromatic.json" "$spp" "$seed" "$f"
     R="$("$COMPARE" "$CREF" "$f" --ref-noise-mse 0)"
     times+=" $(get time_s "$R")"
-    cpus+=" $(awk -v c="$CPU_S" -v s="$STARTUP" -v n="$THREADS" 'BEGIN { print (c - s) / n }')"
+    cpus+=" $(cpu_per_thread)"
     rmses+=" $(get rmse "$R")"
   done
   r="$(median $rmses)"

@@ -12,26 +12,8 @@
 using namespace chlorovdb;
 using namespace chlorovdb::stress;
 
-namespace {
-
-constexpr double kSigmaPerMolar = 100 * 2.302585 * 1e4;  // flat ε = 1e4 L/mol/cm
-
-std::string dye_cube(const std::string& field, double Q, const std::string& mode, const std::string& scatter = "") {
-  return subst(R"({
-    "render": {"resolution": [32, 32], "wavelengths": 8, "fluorescence": "$MODE", "max_depth": 32},
-    "camera": {"position": [0.4, 0.6, 3], "look_at": [0, 0, 0], "fov": 40},
-    "pigments": {"dye": {"extinction": {"table": {"lambda": [250, 830], "value": [1e4, 1e4]}},
-                         "quantum_yield": $Q, "emission": {"gaussian": [650, 20]}}},
-    "materials": {"boundary": {"type": "interface"}, "floor": {"type": "diffuse", "albedo": 0.8}},
-    "media": {"dye": {"solvent": "none", "pigments": [{"pigment": "dye", $FIELD}] $SCATTER}},
-    "shapes": [{"type": "box", "min": [-0.5, -0.5, -0.5], "max": [0.5, 0.5, 0.5], "material": "boundary", "inside": "dye"},
-               {"type": "quad", "corner": [-3, -0.5, -3], "edge_u": [0, 0, 6], "edge_v": [6, 0, 0], "material": "floor"}],
-    "lights": [{"type": "environment", "spectrum": 1}]
-  })",
-               {{"$MODE", mode}, {"$Q", num(Q)}, {"$FIELD", field}, {"$SCATTER", scatter}});
-}
-
-}  // namespace
+// More pixels, wavelengths and depth than the CI-sized suite's dye cube.
+constexpr DyeCubeRender kLongRender{32, 8, 32};
 
 TEST(StressLong, DefaultSceneWithinEnergyBound) {
   RenderCase c;
@@ -60,7 +42,7 @@ TEST(StressLong, OpticalDepth1e6GridEveryEstimator) {
   for (const std::string estimator : {"auto", "ratio", "residual_ratio", "delta"}) {
     RenderCase c;
     c.name = "long_tau1e6_grid_" + estimator;
-    c.json = dye_cube("\"grid\": {\"file\": \"" + path.string() + "\", \"unit\": \"M\"}", 1.0, "full");
+    c.json = dye_cube("\"grid\": {\"file\": \"" + path.string() + "\", \"unit\": \"M\"}", 1.0, "full", "", kLongRender);
     c.overrides.transmittance = estimator;
     c.overrides.width = c.overrides.height = 16;
     c.spp = 4;
@@ -76,7 +58,7 @@ TEST(StressLong, DenseScatteringReabsorptionCascade) {
     RenderCase c;
     c.name = "long_scattering_reabsorption_" + num(tau_s);
     c.json = dye_cube("\"concentration\": " + num(1.0 / kSigmaPerMolar) + ", \"unit\": \"M\"", 1.0, "full",
-                      ", \"scattering\": {\"coefficient\": " + num(tau_s) + ", \"g\": 0}");
+                      ", \"scattering\": {\"coefficient\": " + num(tau_s) + ", \"g\": 0}", kLongRender);
     c.spp = 8;
     c.threads = 2;
     c.seconds = 120;
