@@ -18,12 +18,15 @@ Bounds3 map_box(const Bounds3& b, const Transform& to_from_from) {
   return r;
 }
 
-// Voxels whose value a lookup anywhere in the continuous index box b can read,
-// dilated by one voxel.
+// Voxels whose value a lookup within a quarter voxel of the continuous index
+// box b can read: a trilinear lookup at p reads voxels floor(p) and floor(p) + 1
+// on each axis, a nearest one the closer of the two. The margin absorbs the
+// rounding that puts a DDA segment's points a hair outside its cell.
+constexpr float kStencilMargin = 0.25f;
 void stencil_voxels(const Bounds3& b, Coord* lo, Coord* hi) {
   for (int a = 0; a < 3; ++a) {
-    (*lo)[a] = int(std::floor(b.lo[a])) - 1;
-    (*hi)[a] = int(std::ceil(b.hi[a])) + 1;
+    (*lo)[a] = int(std::floor(b.lo[a] - kStencilMargin));
+    (*hi)[a] = int(std::floor(b.hi[a] + kStencilMargin)) + 1;
   }
 }
 
@@ -59,8 +62,10 @@ MajorantGrid::MajorantGrid(std::span<const VoxelGrid* const> channels, int voxel
     support.extend(map_box(s, channel_from_majorant[k].inverse()));
   }
   if (support.empty()) return;
+  // Cell faces on voxel faces (half-integers): a cell of n voxels then reads
+  // n + 2 voxels per axis, and the margin never reaches a third.
   for (int a = 0; a < 3; ++a) {
-    origin_[a] = std::floor(support.lo[a]);
+    origin_[a] = std::floor(support.lo[a]) - 0.5f;
     res_[a] = std::max(1, int(std::ceil((support.hi[a] - origin_[a]) / float(voxels_per_cell))));
   }
 

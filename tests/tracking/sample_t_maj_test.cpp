@@ -71,7 +71,7 @@ TEST(SampleTMaj, FirstRealCollisionFollowsTheOpticalDepthInAGrid) {
 TEST(SampleTMaj, MajorantTransmittanceChainsAcrossSegments) {
   // Always null: the product of the T_maj handed out and the one returned is
   // exp(-integral of sigma_maj) over the whole ray, per lane, whatever the segments.
-  const Slab s = piecewise_linear_slab(3.0, rough_profile());
+  const Slab s = piecewise_linear_slab(6.0, rough_profile());
   const SampledWavelengths lambda = four_wavelengths();
   const PreparedMedium pm = prepare(*s.medium, lambda);
   const float len = chlorovdb::length(s.ray.d);
