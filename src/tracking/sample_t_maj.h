@@ -36,7 +36,9 @@ SampledSpectrum sample_T_maj(Ray ray, float t_max, float u, Rng& rng, const Samp
   const Ray ray_index = medium.index_ray(ray);
   const int channels = medium.channels();
 
-  SampledSpectrum T_maj = one, sigma_maj;
+  // Majorant optical depth since the previous collision: one exp per collision,
+  // none per segment (cells are many where the medium is thick).
+  SampledSpectrum tau_maj, sigma_maj;
   float t_last = 0.f;  // previous collision, or the start of the segment
   const bool finished = detail::walk_majorants(
       medium, ray_index, t_max, u, rng,
@@ -46,15 +48,15 @@ SampledSpectrum sample_T_maj(Ray ray, float t_max, float u, Rng& rng, const Samp
         return sigma_maj[0];
       },
       [&](float t) {
-        T_maj *= detail::exp_neg_lanes(sigma_maj, t - t_last, n);
+        tau_maj += sigma_maj * (t - t_last);
         t_last = t;
         const MediumProperties mp = medium.properties(ray_index.at(t), prepared);
-        if (!callback(ray.at(t), mp, sigma_maj, T_maj)) return false;
-        T_maj = one;
+        if (!callback(ray.at(t), mp, sigma_maj, detail::exp_neg_lanes(tau_maj, 1.f, n))) return false;
+        tau_maj = SampledSpectrum(0.f);
         return true;
       },
-      [&](const MajorantSegment& s) { T_maj *= detail::exp_neg_lanes(sigma_maj, s.t_max - t_last, n); });
-  return finished ? T_maj : one;
+      [&](const MajorantSegment& s) { tau_maj += sigma_maj * (s.t_max - t_last); });
+  return finished ? detail::exp_neg_lanes(tau_maj, 1.f, n) : one;
 }
 
 }  // namespace chlorovdb
