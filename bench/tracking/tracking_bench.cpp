@@ -229,9 +229,10 @@ void BM_FreeFlight_Cloud(benchmark::State& state) {
   int64_t collisions = 0;
   for (auto _ : state) {
     sample_T_maj(c[i].ray, c[i].t_max, rng.uniform(), rng, kWavelengths, *s.medium, s.prepared,
-                 [&](const Vec3&, const MediumProperties& mp, const SampledSpectrum& sigma_maj, const SampledSpectrum&) {
+                 [&](const Vec3&, const MediumCollision& collision, const SampledSpectrum& sigma_maj,
+                     const SampledSpectrum&) {
                    ++collisions;
-                   return rng.uniform() * sigma_maj[0] >= mp.sigma_a[0];  // continue on null collisions
+                   return rng.uniform() * sigma_maj[0] >= collision.sigma_t()[0];  // continue on null collisions
                  });
     if (++i == c.size()) i = 0;
   }

@@ -112,10 +112,12 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
         bool scattered = false, terminated = false;
         const SampledSpectrum T_maj = sample_T_maj(
             ray, t_end, rng.uniform(), rng, lambda, scene.media[medium], media[medium],
-            [&](const Vec3& p, const MediumProperties& mp, const SampledSpectrum& sigma_maj,
+            [&](const Vec3& p, const MediumCollision& c, const SampledSpectrum& sigma_maj,
                 const SampledSpectrum& T_m) {
-              const float p_absorb = mp.sigma_a[0] / sigma_maj[0];
-              const float p_scatter = mp.sigma_s[0] / sigma_maj[0];
+              const SampledSpectrum sigma_t = c.sigma_t();
+              const float sigma_s = c.sigma_s(0);
+              const float p_absorb = (sigma_t[0] - sigma_s) / sigma_maj[0];
+              const float p_scatter = sigma_s / sigma_maj[0];
               const float u = rng.uniform();
               if (u < p_absorb) {
                 if (scene.settings.fluorescence == FluorescenceMode::reference)
@@ -129,6 +131,7 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
                   terminated = true;
                   return false;
                 }
+                const MediumProperties mp = c.properties();
                 const float pdf = T_m[0] * mp.sigma_s[0];
                 beta *= T_m * mp.sigma_s / pdf;
                 r_u *= T_m * mp.sigma_s / pdf;
@@ -159,7 +162,7 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
               // Null collision: continue, weighting every lane by sigma_n / its pdf.
               // r_u and r_l are both relative to the pdf of what was sampled
               // (T_maj[0] sigma_n[0]); r_l follows ratio tracking's sigma_maj.
-              const SampledSpectrum sigma_n = clamp_zero(sigma_maj - mp.sigma_a - mp.sigma_s);
+              const SampledSpectrum sigma_n = clamp_zero(sigma_maj - sigma_t);
               const float pdf = T_m[0] * sigma_n[0];
               if (!(pdf > 0.f)) {
                 terminated = true;

@@ -109,9 +109,7 @@ PreparedMedium prepare(const Medium& medium, const SampledWavelengths& lambda) {
   return pm;
 }
 
-MediumProperties Medium::properties(const Vec3& p_index, const PreparedMedium& prepared) const {
-  float v[kMaxMajorantChannels] = {};
-  lookup_channels(p_index, v);
+MediumProperties Medium::properties(const ChannelValues& v, const PreparedMedium& prepared) const {
   MediumProperties mp;
   mp.phase.particle = desc_.particle_phase;
   const int pigments = pigment_count();
@@ -119,8 +117,7 @@ MediumProperties Medium::properties(const Vec3& p_index, const PreparedMedium& p
     const int c = pigment_channel_[k];
     mp.concentration[k] = c < 0 ? pigment_constant_[k] : v[c] * pigment_scale_[k];
   }
-  const float particle_value = particle_channel_ < 0 ? 0.f : v[particle_channel_];
-  // Lane by lane over the carried wavelengths only: this runs at every collision.
+  // Lane by lane over the carried wavelengths only: this runs at every real collision.
   for (int i = 0; i < prepared.lambda_count; ++i) {
     float sigma_a = prepared.sigma_a_constant[i];  // holds the constant pigments already
     for (int k = 0; k < pigments; ++k) {
@@ -128,12 +125,11 @@ MediumProperties Medium::properties(const Vec3& p_index, const PreparedMedium& p
       mp.sigma_a_pigment[k][i] = sigma_a_k;
       if (pigment_channel_[k] >= 0) sigma_a += sigma_a_k;
     }
-    const float sigma_s_particle =
-        prepared.sigma_s_particle_constant[i] + prepared.sigma_s_particle_per_value[i] * particle_value;
-    const float sigma_s = prepared.sigma_s_molecular[i] + sigma_s_particle;
+    const float particle = sigma_s_particle(v, prepared, i);
+    const float sigma_s = prepared.sigma_s_molecular[i] + particle;
     mp.sigma_a[i] = sigma_a;
     mp.sigma_s[i] = sigma_s;
-    mp.phase.particle_fraction[i] = sigma_s > 0.f ? sigma_s_particle / sigma_s : 0.f;
+    mp.phase.particle_fraction[i] = sigma_s > 0.f ? particle / sigma_s : 0.f;
   }
   return mp;
 }

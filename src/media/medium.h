@@ -129,18 +129,37 @@ class Medium {
   }
   Vec3 index_point(const Vec3& p_world) const { return homogeneous() ? p_world : index_from_world_.point(p_world); }
   MajorantIterator majorants(const Ray& ray_index, float t_max) const { return majorants_.segments(ray_index, t_max); }
-  inline SampledSpectrum sigma_t(const Vec3& p_index, const PreparedMedium& prepared) const;
-  MediumProperties properties(const Vec3& p_index, const PreparedMedium& prepared) const;
+  // The grids' values at one point (one lookup per distinct grid): every coefficient there
+  // follows from them, so a caller that needs several looks up once.
+  using ChannelValues = std::array<float, kMaxMajorantChannels>;
+  inline ChannelValues channel_values(const Vec3& p_index) const;
+  SampledSpectrum sigma_t(const ChannelValues& v, const PreparedMedium& prepared) const {
+    return prepared.sigma_t_for(v, int(channels_.size()));
+  }
+  // sigma_s on one lane (the hero's, to choose between absorption, scattering and null).
+  float sigma_s(const ChannelValues& v, const PreparedMedium& prepared, int lane) const {
+    return prepared.sigma_s_molecular[lane] + sigma_s_particle(v, prepared, lane);
+  }
+  MediumProperties properties(const ChannelValues& v, const PreparedMedium& prepared) const;
+  SampledSpectrum sigma_t(const Vec3& p_index, const PreparedMedium& prepared) const {
+    return sigma_t(channel_values(p_index), prepared);
+  }
+  MediumProperties properties(const Vec3& p_index, const PreparedMedium& prepared) const {
+    return properties(channel_values(p_index), prepared);
+  }
 
  private:
   friend PreparedMedium prepare(const Medium& medium, const SampledWavelengths& lambda);
+  float sigma_s_particle(const ChannelValues& v, const PreparedMedium& prepared, int lane) const {
+    const float particle_value = particle_channel_ < 0 ? 0.f : v[particle_channel_];
+    return prepared.sigma_s_particle_constant[lane] + prepared.sigma_s_particle_per_value[lane] * particle_value;
+  }
   // A distinct grid and how to reach its index space from the medium's.
   struct Channel {
     const VoxelGrid* grid;
     bool same_space;                     // its index space is the medium's
     Transform grid_from_medium_index;
   };
-  inline void lookup_channels(const Vec3& p_index, float* values) const;
 
   MediumDesc desc_;
   std::vector<Channel> channels_;
@@ -162,18 +181,14 @@ inline MediumProperties sample_point(const Medium& medium, const Vec3& p_world, 
   return medium.properties(medium.index_point(p_world), prepared);
 }
 
-inline void Medium::lookup_channels(const Vec3& p_index, float* values) const {
+inline Medium::ChannelValues Medium::channel_values(const Vec3& p_index) const {
+  ChannelValues values{};
   for (size_t c = 0; c < channels_.size(); ++c) {
     const Channel& ch = channels_[c];
     const Vec3 p = ch.same_space ? p_index : ch.grid_from_medium_index.point(p_index);
     values[c] = ch.grid->lookup(p, desc_.interpolation);
   }
-}
-
-inline SampledSpectrum Medium::sigma_t(const Vec3& p_index, const PreparedMedium& prepared) const {
-  float v[kMaxMajorantChannels] = {};
-  lookup_channels(p_index, v);
-  return prepared.sigma_t_for(v, int(channels_.size()));
+  return values;
 }
 
 }  // namespace chlorovdb

@@ -6,11 +6,12 @@
 // Contract:
 // - Tentative collisions are drawn with the hero wavelength's majorant
 //   sigma_maj[0] (lane 0 drives distances; segments where it is 0 get none).
-// - At each, callback(p, mp, sigma_maj, T_maj) is called with the world-space
-//   point, the medium's coefficients there (MediumProperties), the segment's
-//   per-lane majorant and the per-lane majorant transmittance e^{-sigma_maj dt}
-//   since the previous collision (or the ray origin). The collision's pdf for the
-//   hero is T_maj[0] * sigma_maj[0]; sigma_n = sigma_maj - sigma_a - sigma_s >= 0.
+// - At each, callback(p, c, sigma_maj, T_maj) is called with the world-space
+//   point, the medium there (MediumCollision: its coefficients on demand), the
+//   segment's per-lane majorant and the per-lane majorant transmittance
+//   e^{-sigma_maj dt} since the previous collision (or the ray origin). The
+//   collision's pdf for the hero is T_maj[0] * sigma_maj[0];
+//   sigma_n = sigma_maj - sigma_t >= 0.
 //   The callback returns false to stop (absorption, scattering, roulette).
 // - Returns the majorant transmittance from the last collision to t_max, or 1
 //   if the callback stopped the walk (lanes the path does not carry are 0).
@@ -23,6 +24,20 @@
 #include "tracking/majorant_walk.h"
 
 namespace chlorovdb {
+
+// The medium at a tentative collision, looked up once. Most collisions in thick
+// media are null and need only sigma_t (and the hero's sigma_s to tell absorption
+// from scattering); the full MediumProperties (per-pigment parts, phase) are
+// computed only where a caller asks, at real collisions.
+struct MediumCollision {
+  const Medium& medium;
+  const PreparedMedium& prepared;
+  Medium::ChannelValues values;
+
+  SampledSpectrum sigma_t() const { return medium.sigma_t(values, prepared); }
+  float sigma_s(int lane) const { return medium.sigma_s(values, prepared, lane); }
+  MediumProperties properties() const { return medium.properties(values, prepared); }
+};
 
 template <typename F>
 SampledSpectrum sample_T_maj(Ray ray, float t_max, float u, Rng& rng, const SampledWavelengths& lambda,
@@ -50,8 +65,8 @@ SampledSpectrum sample_T_maj(Ray ray, float t_max, float u, Rng& rng, const Samp
       [&](float t) {
         tau_maj += sigma_maj * (t - t_last);
         t_last = t;
-        const MediumProperties mp = medium.properties(ray_index.at(t), prepared);
-        if (!callback(ray.at(t), mp, sigma_maj, detail::exp_neg_lanes(tau_maj, 1.f, n))) return false;
+        const MediumCollision c{medium, prepared, medium.channel_values(ray_index.at(t))};
+        if (!callback(ray.at(t), c, sigma_maj, detail::exp_neg_lanes(tau_maj, 1.f, n))) return false;
         tau_maj = SampledSpectrum(0.f);
         return true;
       },

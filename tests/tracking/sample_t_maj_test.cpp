@@ -38,8 +38,8 @@ std::vector<double> first_real_collisions(const Slab& s, int n, uint64_t seed) {
   for (int i = 0; i < n; ++i) {
     double hit = 1e30;
     sample_T_maj(s.ray, s.t_max, rng.uniform(), rng, lambda, *s.medium, pm,
-                 [&](const Vec3& p, const MediumProperties& mp, const SampledSpectrum& sigma_maj, const SampledSpectrum&) {
-                   if (rng.uniform() * sigma_maj[0] >= mp.sigma_a[0] + mp.sigma_s[0]) return true;  // null
+                 [&](const Vec3& p, const MediumCollision& c, const SampledSpectrum& sigma_maj, const SampledSpectrum&) {
+                   if (rng.uniform() * sigma_maj[0] >= c.sigma_t()[0]) return true;  // null
                    hit = double(length(p - s.ray.o));
                    return false;
                  });
@@ -83,7 +83,7 @@ TEST(SampleTMaj, MajorantTransmittanceChainsAcrossSegments) {
   SampledSpectrum product(1.f);
   int collisions = 0;
   const SampledSpectrum last = sample_T_maj(s.ray, s.t_max, rng.uniform(), rng, lambda, *s.medium, pm,
-                                            [&](const Vec3&, const MediumProperties&, const SampledSpectrum&,
+                                            [&](const Vec3&, const MediumCollision&, const SampledSpectrum&,
                                                 const SampledSpectrum& T_maj) {
                                               product *= T_maj;
                                               ++collisions;
@@ -124,9 +124,13 @@ TEST(SampleTMaj, NoCoefficientExceedsItsMajorantInSpikyGrids) {
       const Vec3 o{-0.1f + 0.6f * rng.uniform(), -0.1f + 0.6f * rng.uniform(), -0.1f + 0.6f * rng.uniform()};
       const Ray ray{o, sample_uniform_sphere({rng.uniform(), rng.uniform()})};
       sample_T_maj(ray, 0.8f, rng.uniform(), rng, lambda, m, pm,
-                   [&](const Vec3&, const MediumProperties& mp, const SampledSpectrum& sigma_maj, const SampledSpectrum&) {
+                   [&](const Vec3&, const MediumCollision& c, const SampledSpectrum& sigma_maj, const SampledSpectrum&) {
+                     const MediumProperties mp = c.properties();
+                     const SampledSpectrum sigma_t = c.sigma_t();
                      for (int l = 0; l < 4; ++l) {
                        EXPECT_LE(mp.sigma_a[l] + mp.sigma_s[l], sigma_maj[l] * (1.f + 1e-5f));
+                       EXPECT_LE(sigma_t[l], sigma_maj[l] * (1.f + 1e-5f));
+                       EXPECT_NEAR(c.sigma_s(l), mp.sigma_s[l], 1e-6f * mp.sigma_s[l]);
                        ++checked;
                      }
                      return true;
@@ -175,7 +179,7 @@ TEST(SampleTMaj, EmptySpaceCostsNoLookups) {
   int lookups = 0, in_empty = 0;
   for (int i = 0; i < 2000; ++i)
     sample_T_maj(ray, 0.3f, rng.uniform(), rng, lambda, m, pm,
-                 [&](const Vec3& p, const MediumProperties&, const SampledSpectrum&, const SampledSpectrum&) {
+                 [&](const Vec3& p, const MediumCollision&, const SampledSpectrum&, const SampledSpectrum&) {
                    ++lookups;
                    const float x = p.x / 0.001f;
                    in_empty += x > 30.f && x < 225.f;
@@ -215,7 +219,8 @@ TEST(SampleTMaj, FurnaceWithAChromaticPureScattererReturnsOnePerLane) {
       bool scattered = false;
       const SampledSpectrum T_maj = sample_T_maj(
           ray, t1, rng.uniform(), rng, lambda, m, pm,
-          [&](const Vec3& p, const MediumProperties& mp, const SampledSpectrum& sigma_maj, const SampledSpectrum& T) {
+          [&](const Vec3& p, const MediumCollision& c, const SampledSpectrum& sigma_maj, const SampledSpectrum& T) {
+            const MediumProperties mp = c.properties();
             if (rng.uniform() * sigma_maj[0] < mp.sigma_s[0]) {
               beta *= T * mp.sigma_s / (T[0] * mp.sigma_s[0]);
               const MediumPhaseSample ps = phase_sample(mp.phase, -ray.d, {rng.uniform(), rng.uniform()});
