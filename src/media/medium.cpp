@@ -106,6 +106,13 @@ PreparedMedium prepare(const Medium& medium, const SampledWavelengths& lambda) {
     pm.channel_sigma_t[medium.particle_channel_] += pm.sigma_s_particle_per_value;
   }
   pm.sigma_t_constant = pm.sigma_a_constant + pm.sigma_s_molecular + pm.sigma_s_particle_constant;
+  auto is_grey = [&](const SampledSpectrum& s) {
+    for (int i = 1; i < lambda.count(); ++i)
+      if (s[i] != s[0]) return false;
+    return true;
+  };
+  pm.grey = is_grey(pm.sigma_t_constant);
+  for (int c = 0; c < medium.channels(); ++c) pm.grey = pm.grey && is_grey(pm.channel_sigma_t[c]);
   return pm;
 }
 

@@ -82,17 +82,28 @@ struct PreparedMedium {
   SampledSpectrum sigma_t_constant;
   std::array<SampledSpectrum, kMaxMajorantChannels> channel_sigma_t;
 
+  // sigma_t is the same on every carried lane (grey absorbers and scatterers, no
+  // solvent): transmittance is then tracked on one lane (tracking/transmittance.cpp).
+  bool grey = false;
+
   // Per-wavelength bounds of sigma_t over a majorant segment (PHYSICS §6):
   // sigma_maj = zeta + 100 ln10 sum_k eps_k c_max,k + sigma_s,max; sigma_min likewise with c_min.
-  SampledSpectrum sigma_maj(const MajorantSegment& s, int channels) const { return sigma_t_for(s.c_max, channels); }
-  SampledSpectrum sigma_min(const MajorantSegment& s, int channels) const { return sigma_t_for(s.c_min, channels); }
+  // `lanes`: the first lanes to compute (the others come out 0); all carried lanes by default.
+  SampledSpectrum sigma_maj(const MajorantSegment& s, int channels, int lanes) const {
+    return sigma_t_for(s.c_max, channels, lanes);
+  }
+  SampledSpectrum sigma_min(const MajorantSegment& s, int channels, int lanes) const {
+    return sigma_t_for(s.c_min, channels, lanes);
+  }
+  SampledSpectrum sigma_maj(const MajorantSegment& s, int channels) const { return sigma_maj(s, channels, lambda_count); }
+  SampledSpectrum sigma_min(const MajorantSegment& s, int channels) const { return sigma_min(s, channels, lambda_count); }
 
   // sigma_t for the given channel values. Loops over the carried lanes only (the
   // others are zero in every prepared spectrum): this runs at every collision.
   template <typename Values>
-  SampledSpectrum sigma_t_for(const Values& values, int channels) const {
+  SampledSpectrum sigma_t_for(const Values& values, int channels, int lanes) const {
     SampledSpectrum s;
-    for (int i = 0; i < lambda_count; ++i) {
+    for (int i = 0; i < lanes; ++i) {
       float sigma = sigma_t_constant[i];
       for (int c = 0; c < channels; ++c) sigma += channel_sigma_t[c][i] * values[c];
       s[i] = sigma;
@@ -133,8 +144,11 @@ class Medium {
   // follows from them, so a caller that needs several looks up once.
   using ChannelValues = std::array<float, kMaxMajorantChannels>;
   inline ChannelValues channel_values(const Vec3& p_index) const;
+  SampledSpectrum sigma_t(const ChannelValues& v, const PreparedMedium& prepared, int lanes) const {
+    return prepared.sigma_t_for(v, int(channels_.size()), lanes);
+  }
   SampledSpectrum sigma_t(const ChannelValues& v, const PreparedMedium& prepared) const {
-    return prepared.sigma_t_for(v, int(channels_.size()));
+    return sigma_t(v, prepared, prepared.lambda_count);
   }
   // sigma_s on one lane (the hero's, to choose between absorption, scattering and null).
   float sigma_s(const ChannelValues& v, const PreparedMedium& prepared, int lane) const {

@@ -50,14 +50,14 @@ SampledSpectrum ratio_tracking(const Track& k, Rng& rng) {
   detail::walk_majorants(
       k.medium, k.ray_index, k.t_end, rng.uniform(), rng,
       [&](const MajorantSegment& s) {
-        const SampledSpectrum sigma_maj = k.prepared.sigma_maj(s, k.channels);
+        const SampledSpectrum sigma_maj = k.prepared.sigma_maj(s, k.channels, k.n);
         if (k.unbounded && s.t_max >= k.t_end) {
           cut_unbounded(sigma_maj, k.n, &T);
           return 0.f;
         }
         if constexpr (kResidual) {
           // The control part is integrated exactly; only the residual is tracked.
-          sigma_c = k.prepared.sigma_min(s, k.channels);
+          sigma_c = k.prepared.sigma_min(s, k.channels, k.n);
           T_c *= detail::exp_neg_lanes(sigma_c, s.t_max - s.t_min, k.n);
         }
         const float rate = max_lane(kResidual ? sigma_maj - sigma_c : sigma_maj, k.n);
@@ -65,7 +65,7 @@ SampledSpectrum ratio_tracking(const Track& k, Rng& rng) {
         return rate;
       },
       [&](float t) {
-        const SampledSpectrum sigma_t = k.medium.sigma_t(k.ray_index.at(t), k.prepared);
+        const SampledSpectrum sigma_t = k.medium.sigma_t(k.medium.channel_values(k.ray_index.at(t)), k.prepared, k.n);
         float T_max = 0.f;
         for (int i = 0; i < k.n; ++i) {  // rounding may push sigma_t a hair past the majorant: clamp
           const float sigma_r = kResidual ? sigma_t[i] - sigma_c[i] : sigma_t[i];
@@ -99,7 +99,7 @@ SampledSpectrum delta_tracking(const Track& k, Rng& rng) {
   const bool escaped = detail::walk_majorants(
       k.medium, k.ray_index, k.t_end, rng.uniform(), rng,
       [&](const MajorantSegment& s) {
-        sigma_maj = k.prepared.sigma_maj(s, k.channels);
+        sigma_maj = k.prepared.sigma_maj(s, k.channels, k.n);
         if (k.unbounded && s.t_max >= k.t_end) {
           cut_unbounded(sigma_maj, k.n, &T);
           return 0.f;
@@ -109,7 +109,7 @@ SampledSpectrum delta_tracking(const Track& k, Rng& rng) {
         return rate;
       },
       [&](float t) {
-        const SampledSpectrum sigma_t = k.medium.sigma_t(k.ray_index.at(t), k.prepared);
+        const SampledSpectrum sigma_t = k.medium.sigma_t(k.medium.channel_values(k.ray_index.at(t)), k.prepared, k.n);
         float p_null[kMaxWavelengths], P = 0.f;
         for (int i = 0; i < k.n; ++i) {
           p_null[i] = std::max(0.f, 1.f - sigma_t[i] * inv_rate);
@@ -156,13 +156,19 @@ SampledSpectrum transmittance(const Ray& ray, float t_max, const SampledWaveleng
     }
     estimator = TransmittanceEstimator::residual_ratio;
   }
-  const Track k{medium, prepared, medium.index_ray({ray.o, ray.d / len}), t_max * len, unbounded, n,
+  // A grey medium attenuates every wavelength alike: track one lane and copy it
+  // (the cloud benchmark: a shadow ray's lane arithmetic falls eightfold).
+  const int lanes = prepared.grey ? 1 : n;
+  const Track k{medium, prepared, medium.index_ray({ray.o, ray.d / len}), t_max * len, unbounded, lanes,
                 medium.channels()};
+  SampledSpectrum T;
   switch (estimator) {
-    case TransmittanceEstimator::ratio: return ratio_tracking<false>(k, rng);
-    case TransmittanceEstimator::delta: return delta_tracking(k, rng);
-    default: return ratio_tracking<true>(k, rng);
+    case TransmittanceEstimator::ratio: T = ratio_tracking<false>(k, rng); break;
+    case TransmittanceEstimator::delta: T = delta_tracking(k, rng); break;
+    default: T = ratio_tracking<true>(k, rng);
   }
+  for (int i = lanes; i < n; ++i) T[i] = T[0];
+  return T;
 }
 
 }  // namespace chlorovdb

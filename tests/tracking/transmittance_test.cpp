@@ -141,3 +141,43 @@ TEST(Transmittance, EstimatorNamesRoundTrip) {
   EXPECT_EQ(automatic_transmittance_estimator(*piecewise_linear_slab(1.0, rough_profile()).medium),
             TransmittanceEstimator::residual_ratio);
 }
+
+TEST(Transmittance, GreyMediaTrackOneLaneForAll) {
+  // The rough slab's grid, holding a grey absorber and grey particles instead of the
+  // ramp pigment in water: prepare() finds it grey, every estimator then returns one
+  // value on all carried lanes, unbiased against the exact optical depth.
+  const Slab s = piecewise_linear_slab(2.0, rough_profile());
+  const Field& field = s.medium->desc().pigments[0].concentration;
+  const double length = 2.0 * double(chlorovdb::length(s.ray.d));
+  // scale x integral of the profile along the ray, from the ramp slab's exact depth.
+  const double c_integral = (s.tau_to(length, 0) - sigma_t_of(0.0, 0) * length) / (sigma_t_of(1.0, 0) - sigma_t_of(0.0, 0));
+  MediumDesc d;
+  d.solvent = Solvent::none();
+  const float eps = 25000.f;  // L/(mol cm): sigma_a = 100 ln10 eps c; tau about 2
+  d.pigments.push_back({{"grey", Spectrum::constant(eps), Spectrum::constant(0.f), 0.f}, field});
+  d.particle_sigma_s = Field::from_grid(field.grid, 3.f * field.scale);  // 3 /m per mol/L
+  const Medium grey(d);
+  const double tau = (100.0 * std::log(10.0) * eps + 3.0) * c_integral;
+  ASSERT_GT(tau, 0.5);
+  ASSERT_LT(tau, 5.0);
+
+  const SampledWavelengths lambda = four_wavelengths();
+  const PreparedMedium pm = prepare(grey, lambda);
+  EXPECT_TRUE(pm.grey);
+  EXPECT_FALSE(prepare(*s.medium, lambda).grey);  // the ramp pigment and water are not
+  uint64_t seed = 300;
+  for (TransmittanceEstimator e : kTracking) {
+    Rng rng(seed++, 0);
+    double sum = 0, sum2 = 0;
+    const int n = 20000;
+    for (int i = 0; i < n; ++i) {
+      const SampledSpectrum T = transmittance(s.ray, s.t_max, lambda, grey, pm, e, rng);
+      for (int l = 1; l < 4; ++l) ASSERT_EQ(T[l], T[0]) << to_string(e);
+      ASSERT_EQ(T[4], 0.f);
+      sum += T[0];
+      sum2 += double(T[0]) * T[0];
+    }
+    const double mean = sum / n, se = std::sqrt(std::max(0.0, sum2 / n - mean * mean) / (n - 1));
+    EXPECT_NEAR(mean, std::exp(-tau), 4.0 * se + kRounding * std::exp(-tau)) << to_string(e) << " tau " << tau;
+  }
+}
