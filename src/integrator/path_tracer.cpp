@@ -110,11 +110,12 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
       } else {
         // Delta tracking with the hero wavelength; other lanes are weighted (spectral MIS).
         bool scattered = false, terminated = false;
+        const bool grey = media[medium].grey;
         const SampledSpectrum T_maj = sample_T_maj(
             ray, t_end, rng.uniform(), rng, lambda, scene.media[medium], media[medium],
             [&](const Vec3& p, const MediumCollision& c, const SampledSpectrum& sigma_maj,
                 const SampledSpectrum& T_m) {
-              const SampledSpectrum sigma_t = c.sigma_t();
+              const SampledSpectrum sigma_t = c.sigma_t(grey ? 1 : n);  // grey: lane 0 stands for all
               const float sigma_s = c.sigma_s(0);
               const float p_absorb = (sigma_t[0] - sigma_s) / sigma_maj[0];
               const float p_scatter = sigma_s / sigma_maj[0];
@@ -162,6 +163,18 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
               // Null collision: continue, weighting every lane by sigma_n / its pdf.
               // r_u and r_l are both relative to the pdf of what was sampled
               // (T_maj[0] sigma_n[0]); r_l follows ratio tracking's sigma_maj.
+              if (grey) {
+                // Every lane's T_maj sigma_n is the pdf itself: beta and r_u keep
+                // their values, r_l changes by one factor (most collisions in a
+                // thick grey medium are null: the cloud benchmark).
+                const float sigma_n0 = sigma_maj[0] - sigma_t[0];
+                if (!(sigma_n0 > 0.f)) {
+                  terminated = true;
+                  return false;
+                }
+                r_l *= sigma_maj[0] / sigma_n0;
+                return true;
+              }
               const SampledSpectrum sigma_n = clamp_zero(sigma_maj - sigma_t);
               const float pdf = T_m[0] * sigma_n[0];
               if (!(pdf > 0.f)) {
