@@ -3,8 +3,10 @@
 #include <embree3/rtcore.h>
 #include <fmt/format.h>
 
+#include <algorithm>
 #include <cmath>
 #include <deque>
+#include <optional>
 #include <stdexcept>
 #include <string>
 #include <variant>
@@ -26,6 +28,7 @@ constexpr float gamma_bound(int n) {
 // tests/geometry/spawn_ray_test.cpp finds no re-hits down to gamma(1), so 7 leaves margin.
 constexpr float kTriangleErrorGamma = gamma_bound(7);
 constexpr float kSphereErrorGamma = gamma_bound(5);  // reprojection onto the sphere
+constexpr float kBoxErrorGamma = gamma_bound(3);     // o + t d off the face (the face's own axis is exact)
 // Shadow rays stop this fraction of their length short of the target.
 constexpr float kShadowEpsilon = 1e-4f;
 
@@ -40,6 +43,63 @@ struct SphereShape {
   float radius;
   int shape_id;
 };
+
+struct BoxShape {
+  Bounds3 box;
+  int shape_id;
+};
+
+// Closest crossing of the box's surface with t in (0, t_max]: the entry face
+// from outside, the exit face from inside (slab test, per axis the parameters of
+// both planes; an axis the ray is parallel to either excludes the ray or is skipped).
+std::optional<SurfaceHit> intersect_box(const BoxShape& b, const Ray& ray, float t_max) {
+  float t_near = -kInfinity, t_far = kInfinity;
+  int axis_near = -1, axis_far = -1;
+  for (int a = 0; a < 3; ++a) {
+    if (ray.d[a] == 0.f) {
+      if (ray.o[a] < b.box.lo[a] || ray.o[a] > b.box.hi[a]) return std::nullopt;
+      continue;
+    }
+    const float inv = 1.f / ray.d[a];
+    float t0 = (b.box.lo[a] - ray.o[a]) * inv, t1 = (b.box.hi[a] - ray.o[a]) * inv;
+    if (t0 > t1) std::swap(t0, t1);
+    if (t0 > t_near) t_near = t0, axis_near = a;
+    if (t1 < t_far) t_far = t1, axis_far = a;
+  }
+  if (t_near > t_far) return std::nullopt;
+  float t;
+  int axis;
+  bool entering;
+  if (t_near > 0.f) {
+    t = t_near, axis = axis_near, entering = true;
+  } else if (t_far > 0.f) {
+    t = t_far, axis = axis_far, entering = false;
+  } else {
+    return std::nullopt;
+  }
+  if (!(t <= t_max) || axis < 0) return std::nullopt;
+  // Entering across the max face means moving toward -axis; leaving across it, toward +axis.
+  const bool max_face = entering ? ray.d[axis] < 0.f : ray.d[axis] > 0.f;
+  SurfaceHit hit;
+  hit.t = t;
+  hit.shape_id = b.shape_id;
+  hit.prim_id = 2 * axis + (max_face ? 1 : 0);
+  hit.p = ray.o + ray.d * t;
+  hit.p[axis] = max_face ? b.box.hi[axis] : b.box.lo[axis];  // exactly on the face
+  hit.p_error = kBoxErrorGamma * max_component(abs(ray.o) + abs(ray.d * t));
+  hit.ng = Vec3(0.f);
+  hit.ng[axis] = max_face ? 1.f : -1.f;
+  hit.ns = hit.ng;
+  const int u_axis = axis == 0 ? 1 : 0, v_axis = axis == 2 ? 1 : 2;
+  const Vec3 size = b.box.diagonal();
+  hit.uv = {(hit.p[u_axis] - b.box.lo[u_axis]) / size[u_axis], (hit.p[v_axis] - b.box.lo[v_axis]) / size[v_axis]};
+  return hit;
+}
+
+float box_area(const Bounds3& b) {
+  const Vec3 s = b.diagonal();
+  return 2.f * (s.x * s.y + s.y * s.z + s.z * s.x);
+}
 
 // Roots of |o + t d - c|² = r² in double, with the numerically stable form of
 // the discriminant (Ray Tracing Gems ch. 7): b'² - a c = a (r² - |f|²) with f the
@@ -134,8 +194,10 @@ struct GeometryScene::Impl {
   RTCDevice device = nullptr;
   RTCScene scene = nullptr;
   std::string last_error;
-  std::vector<std::variant<MeshShape, const SphereShape*>> shapes;
+  std::vector<std::variant<MeshShape, const SphereShape*, BoxShape>> shapes;
   std::deque<SphereShape> spheres;  // stable addresses: Embree holds pointers to them
+  std::vector<BoxShape> boxes;      // tested outside Embree
+  int embree_shapes = 0;            // none: queries skip Embree
   Bounds3 bounds;
 
   void check(const char* what) const {
@@ -253,6 +315,7 @@ int GeometryScene::add_mesh(TriangleMesh mesh, const Transform& world_from_objec
   MeshShape shape{std::move(mesh), Distribution1D(areas), 0.f};
   shape.area = shape.triangle_pdf.total();
   impl_->shapes.emplace_back(std::move(shape));
+  ++impl_->embree_shapes;
   return id;
 }
 
@@ -271,8 +334,22 @@ int GeometryScene::add_sphere(Vec3 center, float radius) {
   rtcReleaseGeometry(geom);
   impl_->check("adding a sphere");
   impl_->shapes.emplace_back(&s);
+  ++impl_->embree_shapes;
   impl_->bounds.extend(center - Vec3(radius));
   impl_->bounds.extend(center + Vec3(radius));
+  return id;
+}
+
+int GeometryScene::add_box(const Bounds3& box) {
+  if (box.empty() || !(box.diagonal().x > 0.f && box.diagonal().y > 0.f && box.diagonal().z > 0.f) ||
+      !is_finite(box.lo) || !is_finite(box.hi))
+    throw std::invalid_argument("add_box: the box must be finite and have positive extent on every axis");
+  const int id = int(impl_->shapes.size());
+  const BoxShape b{box, id};
+  impl_->shapes.emplace_back(b);
+  impl_->boxes.push_back(b);
+  impl_->bounds.extend(box.lo);
+  impl_->bounds.extend(box.hi);
   return id;
 }
 
@@ -282,21 +359,35 @@ void GeometryScene::commit() {
 }
 
 std::optional<SurfaceHit> GeometryScene::intersect(const Ray& ray, float t_max) const {
-  RTCIntersectContext context;
-  rtcInitIntersectContext(&context);
-  RTCRayHit rh;
-  rh.ray = make_rtc_ray(ray, t_max);
-  rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
-  rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
-  rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
-  rtcIntersect1(impl_->scene, &context, &rh);
-  if (rh.hit.geomID == RTC_INVALID_GEOMETRY_ID) return std::nullopt;
-  const auto& shape = impl_->shapes[rh.hit.geomID];
-  if (const auto* mesh = std::get_if<MeshShape>(&shape)) return impl_->triangle_hit(*mesh, rh);
-  return Impl::sphere_hit(*std::get<const SphereShape*>(shape), rh);
+  std::optional<SurfaceHit> hit;
+  if (impl_->embree_shapes > 0) {
+    RTCIntersectContext context;
+    rtcInitIntersectContext(&context);
+    RTCRayHit rh;
+    rh.ray = make_rtc_ray(ray, t_max);
+    rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.primID = RTC_INVALID_GEOMETRY_ID;
+    rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
+    rtcIntersect1(impl_->scene, &context, &rh);
+    if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
+      const auto& shape = impl_->shapes[rh.hit.geomID];
+      if (const auto* mesh = std::get_if<MeshShape>(&shape)) hit = impl_->triangle_hit(*mesh, rh);
+      else hit = Impl::sphere_hit(*std::get<const SphereShape*>(shape), rh);
+      t_max = hit->t;
+    }
+  }
+  for (const BoxShape& b : impl_->boxes)
+    if (auto h = intersect_box(b, ray, t_max)) {
+      hit = h;
+      t_max = h->t;
+    }
+  return hit;
 }
 
 bool GeometryScene::occluded(const Ray& ray, float t_max) const {
+  for (const BoxShape& b : impl_->boxes)
+    if (intersect_box(b, ray, t_max)) return true;
+  if (impl_->embree_shapes == 0) return false;
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);
   RTCRay r = make_rtc_ray(ray, t_max);
@@ -316,6 +407,22 @@ ShapeSample GeometryScene::sample_area(int shape_id, Point2 u) const {
     // Triangle chosen with pmf area_i / A, point uniform on it with 1 / area_i: overall 1 / A.
     return {b[0] * p0 + b[1] * p1 + b[2] * p2, normalize(cross(p1 - p0, p2 - p0)), 1.f / m->area};
   }
+  if (const auto* b = std::get_if<BoxShape>(&shape)) {
+    // A face with probability area_face / A, then a uniform point on it: overall 1 / A.
+    const Vec3 size = b->box.diagonal();
+    const float face_area[3] = {size.y * size.z, size.z * size.x, size.x * size.y};
+    float x = u.x * box_area(b->box);
+    int face = 0;  // 2 axis + (1 on the max face), as prim_id
+    while (face < 5 && x >= face_area[face / 2]) x -= face_area[face++ / 2];
+    const int axis = face / 2, u_axis = axis == 0 ? 1 : 0, v_axis = axis == 2 ? 1 : 2;
+    const bool max_face = face & 1;
+    Vec3 p, n(0.f);
+    p[axis] = max_face ? b->box.hi[axis] : b->box.lo[axis];
+    p[u_axis] = b->box.lo[u_axis] + size[u_axis] * std::min(x / face_area[axis], 1.f);  // x: remapped u.x
+    p[v_axis] = b->box.lo[v_axis] + size[v_axis] * u.y;
+    n[axis] = max_face ? 1.f : -1.f;
+    return {p, n, 1.f / box_area(b->box)};
+  }
   const SphereShape& s = *std::get<const SphereShape*>(shape);
   const Vec3 n = sample_uniform_sphere(u);
   return {s.center + s.radius * n, n, 1.f / (4.f * kPi * s.radius * s.radius)};
@@ -324,6 +431,7 @@ ShapeSample GeometryScene::sample_area(int shape_id, Point2 u) const {
 float GeometryScene::area(int shape_id) const {
   const auto& shape = impl_->shapes[shape_id];
   if (const auto* m = std::get_if<MeshShape>(&shape)) return m->area;
+  if (const auto* b = std::get_if<BoxShape>(&shape)) return box_area(b->box);
   const SphereShape& s = *std::get<const SphereShape*>(shape);
   return 4.f * kPi * s.radius * s.radius;
 }

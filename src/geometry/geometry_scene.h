@@ -1,6 +1,9 @@
 #pragma once
 // All surfaces of a scene in one Embree BVH. Shapes are triangle meshes (kept
 // in world space for sampling and shading data) and exact analytic spheres.
+// Axis-aligned boxes (the implicit bounds of grid media) stay outside the BVH:
+// a slab test costs a tenth of an Embree query, and a scene that holds only
+// such boxes (the cloud benchmark) never calls Embree.
 // Embree stays behind a pimpl: no other folder includes <embree3/rtcore.h>.
 #include <memory>
 #include <optional>
@@ -18,8 +21,9 @@ struct SurfaceHit {
   Vec3 ng;       // unit geometric normal as stored (CCW-outward), NOT flipped toward the ray,
                  // so dot(ray.d, ng) > 0 means the ray leaves a closed mesh
   Vec3 ns;       // unit shading normal (interpolated; = ng without normals), same side as ng
-  Point2 uv;     // mesh uvs if present, else barycentrics; spheres: (phi / 2pi, theta / pi)
-  int shape_id = -1, prim_id = -1;
+  Point2 uv;     // mesh uvs if present, else barycentrics; spheres: (phi / 2pi, theta / pi);
+                 // boxes: the face's other two coordinates in [0, 1], in axis order
+  int shape_id = -1, prim_id = -1;  // boxes: prim_id = 2 axis + (1 on the max face)
   float p_error = 0;  // bound on |p - exact surface point| per axis, metres (drives spawn offsets)
 };
 
@@ -42,6 +46,8 @@ class GeometryScene {
   // degenerate (load_mesh / drop_degenerate_triangles guarantee it).
   int add_mesh(TriangleMesh mesh, const Transform& world_from_object = {});
   int add_sphere(Vec3 center, float radius);
+  // An axis-aligned box in world space, normals outward (as make_box's mesh).
+  int add_box(const Bounds3& box);
   // Builds the BVH; call after the last add and before any query.
   void commit();
 

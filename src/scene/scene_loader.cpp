@@ -418,7 +418,7 @@ Scene load_scene(const std::filesystem::path& file, const SceneOverrides& overri
     if (medium_bounded[m]) continue;
     const std::optional<Bounds3> box = medium_bounds(scene.media[m]);
     if (!box) continue;
-    const int id = scene.geometry.add_mesh(make_box(*box));
+    const int id = scene.geometry.add_box(*box);
     ShapeBinding b;
     b.medium_inside = int(m);
     scene.shapes.push_back(b);

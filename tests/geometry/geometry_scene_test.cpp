@@ -221,3 +221,89 @@ TEST(GeometryScene, MoveKeepsTheScene) {
   c = std::move(b);
   EXPECT_TRUE(c.intersect({{0, 0, -5}, {0, 0, 1}}, kInfinity));
 }
+
+TEST(GeometryScene, AnalyticBoxAgreesWithTheBoxMesh) {
+  // add_box (a slab test outside Embree) against make_box's triangles in Embree: the
+  // same hits, faces, normals and occlusion, from inside and outside, axis-parallel
+  // rays and rays bounded by t_max included.
+  const Bounds3 box{{-1.f, -0.5f, 0.25f}, {2.f, 0.5f, 1.75f}};
+  GeometryScene analytic, mesh;
+  EXPECT_EQ(analytic.add_sphere({10, 10, 10}, 0.5f), 0);  // shares the id space with other shapes
+  EXPECT_EQ(analytic.add_box(box), 1);
+  analytic.commit();
+  mesh.add_sphere({10, 10, 10}, 0.5f);
+  mesh.add_mesh(make_box(box));
+  mesh.commit();
+  expect_near(analytic.bounds().lo, {-1.f, -0.5f, 0.25f}, 0);
+  EXPECT_NEAR(analytic.area(1), 2.f * (3.f * 1.f + 1.f * 1.5f + 1.5f * 3.f), 1e-5f);
+  Rng rng(11, 0);
+  int hits = 0;
+  for (int i = 0; i < 20000; ++i) {
+    Vec3 o;
+    for (int a = 0; a < 3; ++a) o[a] = box.lo[a] - 1.f + (box.diagonal()[a] + 2.f) * rng.uniform();
+    Vec3 d = sample_uniform_sphere({rng.uniform(), rng.uniform()});
+    if (i % 7 == 0) {
+      d = Vec3(0.f);
+      d[i % 3] = rng.uniform() < 0.5f ? -1.f : 1.f;
+    }
+    const float t_max = i % 3 == 0 ? 3.f * rng.uniform() : kInfinity;
+    const Ray ray{o, d};
+    const auto a = analytic.intersect(ray, t_max), m = mesh.intersect(ray, t_max);
+    ASSERT_EQ(bool(a), bool(m)) << "ray " << i;
+    EXPECT_EQ(analytic.occluded(ray, t_max), bool(m));
+    if (!a) continue;
+    EXPECT_EQ(a->shape_id, m->shape_id);
+    if (a->shape_id != 1) continue;
+    ++hits;
+    EXPECT_NEAR(a->t, m->t, 1e-5f * (1.f + m->t));
+    EXPECT_EQ(a->ng, m->ng);
+    EXPECT_EQ(a->ns, a->ng);
+    expect_near(a->p, m->p, 1e-5f);
+    const int axis = a->prim_id / 2;
+    EXPECT_EQ(a->p[axis], a->prim_id % 2 ? box.hi[axis] : box.lo[axis]) << "exactly on the face";
+    EXPECT_GE(a->uv.x, 0.f);
+    EXPECT_LE(a->uv.x, 1.f);
+    // A ray spawned off the hit, either way, does not find the same face again.
+    for (const Vec3& w : {d, -d}) {
+      const auto next = analytic.intersect(analytic.spawn_ray(*a, w), kInfinity);
+      if (next) EXPECT_FALSE(next->prim_id == a->prim_id && next->t < 1e-3f) << "re-hit, ray " << i;
+    }
+  }
+  EXPECT_GT(hits, 3000);
+}
+
+TEST(GeometryScene, AnalyticBoxAreaSamplesAreUniform) {
+  const Bounds3 box{{0.f, 0.f, 0.f}, {1.f, 2.f, 4.f}};
+  GeometryScene scene;
+  const int id = scene.add_box(box);
+  scene.commit();
+  const float area = scene.area(id);
+  EXPECT_FLOAT_EQ(area, 2.f * (2.f + 8.f + 4.f));
+  Rng rng(5, 0);
+  const int n = 60000;
+  std::array<int, 6> count{};
+  for (int i = 0; i < n; ++i) {
+    const ShapeSample s = scene.sample_area(id, {rng.uniform(), rng.uniform()});
+    EXPECT_FLOAT_EQ(s.pdf_area, 1.f / area);
+    int face = -1;
+    for (int a = 0; a < 3; ++a) {
+      if (s.n[a] != 0.f) face = 2 * a + (s.n[a] > 0.f ? 1 : 0);
+      EXPECT_GE(s.p[a], box.lo[a]);
+      EXPECT_LE(s.p[a], box.hi[a]);
+    }
+    ASSERT_GE(face, 0);
+    EXPECT_EQ(s.p[face / 2], face % 2 ? box.hi[face / 2] : box.lo[face / 2]);
+    ++count[face];
+  }
+  const float face_area[3] = {8.f, 4.f, 2.f};  // faces normal to x, y, z
+  for (int f = 0; f < 6; ++f) {
+    const double p = face_area[f / 2] / area, sd = std::sqrt(n * p * (1 - p));
+    EXPECT_NEAR(count[f], n * p, 4.0 * sd) << "face " << f;
+  }
+}
+
+TEST(GeometryScene, AnalyticBoxRejectsEmptyOrNonFiniteBoxes) {
+  GeometryScene scene;
+  EXPECT_THROW(scene.add_box({{0, 0, 0}, {1, 0, 1}}), std::invalid_argument);
+  EXPECT_THROW(scene.add_box({{0, 0, 0}, {1, std::nanf(""), 1}}), std::invalid_argument);
+}
