@@ -200,6 +200,22 @@ struct GeometryScene::Impl {
   int embree_shapes = 0;            // none: queries skip Embree
   Bounds3 bounds;
 
+  // Embree's device and scene, made on the first mesh or sphere: a scene of
+  // analytic boxes only (the cloud benchmark) never pays Embree's set-up or memory.
+  void ensure_embree() {
+    if (device) return;
+    device = rtcNewDevice(nullptr);
+    if (!device) throw std::runtime_error("Embree: cannot create a device");
+    rtcSetDeviceErrorFunction(
+        device, [](void* user, RTCError, const char* message) { static_cast<Impl*>(user)->last_error = message ? message : ""; },
+        this);
+    scene = rtcNewScene(device);
+    // Robust mode: watertight traversal, no accuracy-reducing shortcuts (rays must not leak out of closed media).
+    rtcSetSceneFlags(scene, RTC_SCENE_FLAG_ROBUST);
+    rtcSetSceneBuildQuality(scene, RTC_BUILD_QUALITY_HIGH);
+    check("creating the scene");
+  }
+
   void check(const char* what) const {
     const RTCError code = rtcGetDeviceError(device);
     if (code != RTC_ERROR_NONE) throw std::runtime_error(fmt::format("Embree: {} failed: {}", what, last_error));
@@ -256,19 +272,7 @@ struct GeometryScene::Impl {
   }
 };
 
-GeometryScene::GeometryScene() : impl_(std::make_unique<Impl>()) {
-  impl_->device = rtcNewDevice(nullptr);
-  if (!impl_->device) throw std::runtime_error("Embree: cannot create a device");
-  rtcSetDeviceErrorFunction(
-      impl_->device,
-      [](void* user, RTCError, const char* message) { static_cast<Impl*>(user)->last_error = message ? message : ""; },
-      impl_.get());
-  impl_->scene = rtcNewScene(impl_->device);
-  // Robust mode: watertight traversal, no accuracy-reducing shortcuts (rays must not leak out of closed media).
-  rtcSetSceneFlags(impl_->scene, RTC_SCENE_FLAG_ROBUST);
-  rtcSetSceneBuildQuality(impl_->scene, RTC_BUILD_QUALITY_HIGH);
-  impl_->check("creating the scene");
-}
+GeometryScene::GeometryScene() : impl_(std::make_unique<Impl>()) {}
 
 GeometryScene::~GeometryScene() {
   if (!impl_) return;  // moved from
@@ -294,6 +298,7 @@ int GeometryScene::add_mesh(TriangleMesh mesh, const Transform& world_from_objec
   drop_degenerate_triangles(mesh);  // a zero-area triangle has no normal to shade with
   if (mesh.indices.empty()) throw std::invalid_argument("add_mesh: mesh has no non-degenerate triangles");
 
+  impl_->ensure_embree();
   const int id = int(impl_->shapes.size());
   RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_TRIANGLE);
   auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(geom, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3,
@@ -321,6 +326,7 @@ int GeometryScene::add_mesh(TriangleMesh mesh, const Transform& world_from_objec
 
 int GeometryScene::add_sphere(Vec3 center, float radius) {
   if (!(radius > 0.f) || !is_finite(center)) throw std::invalid_argument("add_sphere: radius must be positive");
+  impl_->ensure_embree();
   const int id = int(impl_->shapes.size());
   const SphereShape& s = impl_->spheres.emplace_back(SphereShape{center, radius, id});
   RTCGeometry geom = rtcNewGeometry(impl_->device, RTC_GEOMETRY_TYPE_USER);
@@ -354,6 +360,7 @@ int GeometryScene::add_box(const Bounds3& box) {
 }
 
 void GeometryScene::commit() {
+  if (!impl_->scene) return;
   rtcCommitScene(impl_->scene);
   impl_->check("building the BVH");
 }

@@ -35,7 +35,7 @@ struct ShapeSample {
 
 class GeometryScene {
  public:
-  GeometryScene();  // throws std::runtime_error if Embree cannot create a device
+  GeometryScene();  // Embree starts with the first mesh or sphere (std::runtime_error if it cannot)
   ~GeometryScene();
   GeometryScene(GeometryScene&&) noexcept;
   GeometryScene& operator=(GeometryScene&&) noexcept;
