@@ -23,8 +23,10 @@ constexpr const char* kSpectralLayer = "S0";  // emissive, unpolarised (Stokes S
 
 // Writes through OIIO to "<path>.<pid>.tmp" and renames it over `path`: rename is atomic
 // within a file system, so readers see either the old file or the complete new one.
+// `write(out)` writes the pixels into the opened output and returns false on failure.
+template <typename WritePixels>
 void write_atomically(const std::filesystem::path& path, const char* format, const OIIO::ImageSpec& spec,
-                      const void* pixels, OIIO::TypeDesc pixel_type) {
+                      WritePixels&& write) {
   const std::filesystem::path tmp = fmt::format("{}.{}.tmp", path.string(), ::getpid());
   auto fail = [&](const std::string& why) {
     std::error_code ignored;
@@ -34,7 +36,7 @@ void write_atomically(const std::filesystem::path& path, const char* format, con
   auto out = OIIO::ImageOutput::create(format);
   if (!out) fail(OIIO::geterror());
   if (!out->open(tmp.string(), spec)) fail(out->geterror());
-  if (!out->write_image(pixel_type, pixels)) fail(out->geterror());
+  if (!write(*out)) fail(out->geterror());
   if (!out->close()) fail(out->geterror());
   std::error_code ec;
   std::filesystem::rename(tmp, path, ec);
@@ -131,17 +133,23 @@ void write_exr(const std::filesystem::path& path, const Image& image, ExrPixelTy
     if (const auto* d = std::get_if<double>(&value)) spec.attribute(name, OIIO::TypeDesc::DOUBLE, d);
   }
 
-  // Interleave all layers into one pixel array.
-  const size_t pixel_count = size_t(image.width) * size_t(image.height);
-  std::vector<float> pixels(pixel_count * size_t(nchannels));
-  size_t offset = 0;
-  for (const ImageLayer& layer : image.layers) {
-    const size_t n = layer.channels.size();
-    for (size_t p = 0; p < pixel_count; ++p)
-      std::copy_n(layer.pixels.begin() + p * n, n, pixels.begin() + p * size_t(nchannels) + offset);
-    offset += n;
-  }
-  write_atomically(path, "openexr", spec, pixels.data(), OIIO::TypeDesc::FLOAT);
+  // Interleave the layers one scanline at a time: a whole interleaved copy would
+  // double the image's memory at the moment a render's memory peaks.
+  write_atomically(path, "openexr", spec, [&](OIIO::ImageOutput& out) {
+    const size_t width = size_t(image.width);
+    std::vector<float> row(width * size_t(nchannels));
+    for (int y = 0; y < image.height; ++y) {
+      size_t offset = 0;
+      for (const ImageLayer& layer : image.layers) {
+        const size_t n = layer.channels.size();
+        for (size_t x = 0; x < width; ++x)
+          std::copy_n(layer.pixels.begin() + (size_t(y) * width + x) * n, n, row.begin() + x * size_t(nchannels) + offset);
+        offset += n;
+      }
+      if (!out.write_scanline(y, 0, OIIO::TypeDesc::FLOAT, row.data())) return false;
+    }
+    return true;
+  });
 }
 
 Image read_exr(const std::filesystem::path& path) {
@@ -218,7 +226,8 @@ void write_png(const std::filesystem::path& path, const ImageLayer& rgb, int wid
       const float v = srgb_encode(rgb.pixels[p * n + c] * scale);
       bytes[p * 3 + c] = uint8_t(v > 0.f ? std::min(v, 1.f) * 255.f + 0.5f : 0.f);  // NaN -> 0
     }
-  write_atomically(path, "png", OIIO::ImageSpec(width, height, 3, OIIO::TypeDesc::UINT8), bytes.data(), OIIO::TypeDesc::UINT8);
+  write_atomically(path, "png", OIIO::ImageSpec(width, height, 3, OIIO::TypeDesc::UINT8),
+                   [&](OIIO::ImageOutput& out) { return out.write_image(OIIO::TypeDesc::UINT8, bytes.data()); });
 }
 
 }  // namespace chlorovdb
