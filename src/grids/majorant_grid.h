@@ -1,18 +1,19 @@
 #pragma once
 // MajorantGrid: coarse cells over one or more VoxelGrids ("channels"), each
 // cell holding per channel the max and min of every value a lookup inside the
-// cell can return: the max / min over the voxels whose trilinear stencil
-// reaches the cell, dilated by one voxel (so nearest lookups and points that
-// rounding puts a hair outside the cell are covered too). An under-estimated
-// majorant would bias tracking silently; tests/tracking checks this bound.
+// cell can return: the max / min over the voxels a trilinear or nearest lookup
+// within a quarter voxel of the cell reads (cell faces lie on voxel faces, so an
+// n-voxel cell reads n + 2 voxels per axis, and points that rounding puts a hair
+// outside the cell are covered too). An under-estimated majorant would bias
+// tracking silently; tests/grids and tests/tracking check this bound.
 //
 // MajorantIterator walks the cells a ray crosses (3-D DDA, Amanatides & Woo)
 // and yields segments in the ray's own parameter t. Runs of cells whose maxima
 // are all zero come out merged as one segment. Empty space is crossed in jumps:
 // each empty cell knows its Chebyshev distance r (in cells) to the nearest
 // non-empty one, so the cube of half-width r - 1 around it is empty and the
-// ray leaves that cube in one step. A jump lands a hair short of a non-empty
-// cell at worst, which the one-voxel dilation of the bounds already covers.
+// ray leaves that cube in one step. Rounding may end a jump a hair inside a
+// non-empty cell; lookups there read only voxels of the empty cell's own stencil.
 #include <array>
 #include <optional>
 #include <span>

@@ -11,7 +11,7 @@ using namespace chlorovdb;
 namespace {
 
 // Mostly empty, with isolated spikes and a few dense blocks: the features a
-// majorant built without the stencil dilation would miss.
+// majorant built without the full stencil (or its margin) would miss.
 DenseGrid spiky_grid(Coord dims, uint64_t seed) {
   DenseGrid d(dims);
   Rng rng(seed, 0);
