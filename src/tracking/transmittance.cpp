@@ -3,6 +3,7 @@
 #include <algorithm>
 
 #include "core/constants.h"
+#include "core/keyword.h"
 #include "tracking/majorant_walk.h"
 
 namespace chlorovdb {
@@ -126,10 +127,12 @@ SampledSpectrum delta_tracking(const Track& k, Rng& rng) {
 }  // namespace
 
 std::optional<TransmittanceEstimator> transmittance_estimator_from_string(std::string_view name) {
-  for (TransmittanceEstimator e : {TransmittanceEstimator::delta, TransmittanceEstimator::ratio,
-                                   TransmittanceEstimator::residual_ratio, TransmittanceEstimator::closed_form})
-    if (name == to_string(e)) return e;
-  return std::nullopt;
+  TransmittanceEstimator e;
+  if (!parse_keyword(name, {TransmittanceEstimator::delta, TransmittanceEstimator::ratio,
+                            TransmittanceEstimator::residual_ratio, TransmittanceEstimator::closed_form},
+                     &e))
+    return std::nullopt;
+  return e;
 }
 
 const char* to_string(TransmittanceEstimator estimator) {

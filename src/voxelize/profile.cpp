@@ -6,6 +6,7 @@
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "core/keyword.h"
 #include "core/rng.h"
 #include "grids/vdb_file.h"
 #include "grids/voxel_grid.h"
@@ -32,13 +33,9 @@ void check(bool ok, std::string_view source, std::string_view key, float value, 
 }  // namespace
 
 bool parse_profile_kind(std::string_view word, ProfileKind* kind) {
-  for (ProfileKind k : {ProfileKind::uniform, ProfileKind::linear, ProfileKind::noise, ProfileKind::falloff,
-                        ProfileKind::grid})
-    if (word == to_string(k)) {
-      *kind = k;
-      return true;
-    }
-  return false;
+  return parse_keyword(
+      word, {ProfileKind::uniform, ProfileKind::linear, ProfileKind::noise, ProfileKind::falloff, ProfileKind::grid},
+      kind);
 }
 
 std::string_view to_string(ProfileKind kind) {
@@ -55,12 +52,7 @@ std::string_view to_string(ProfileKind kind) {
 std::string_view to_string(FalloffShape shape) { return shape == FalloffShape::decay ? "decay" : "rise"; }
 
 bool parse_falloff_shape(std::string_view word, FalloffShape* shape) {
-  for (FalloffShape s : {FalloffShape::decay, FalloffShape::rise})
-    if (word == to_string(s)) {
-      *shape = s;
-      return true;
-    }
-  return false;
+  return parse_keyword(word, {FalloffShape::decay, FalloffShape::rise}, shape);
 }
 
 double molar_per_unit(std::string_view unit) {

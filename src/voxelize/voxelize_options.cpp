@@ -8,6 +8,7 @@
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "core/keyword.h"
 #include "voxelize/voxelize.h"
 
 namespace chlorovdb {
@@ -41,23 +42,13 @@ std::string_view to_string(VoxelizeMode mode) {
 }
 
 bool parse_voxelize_mode(std::string_view word, VoxelizeMode* mode) {
-  for (VoxelizeMode m : {VoxelizeMode::solid, VoxelizeMode::shell, VoxelizeMode::spill})
-    if (word == to_string(m)) {
-      *mode = m;
-      return true;
-    }
-  return false;
+  return parse_keyword(word, {VoxelizeMode::solid, VoxelizeMode::shell, VoxelizeMode::spill}, mode);
 }
 
 std::string_view to_string(SpillDirection direction) { return direction == SpillDirection::normal ? "normal" : "up"; }
 
 bool parse_spill_direction(std::string_view word, SpillDirection* direction) {
-  for (SpillDirection d : {SpillDirection::normal, SpillDirection::up})
-    if (word == to_string(d)) {
-      *direction = d;
-      return true;
-    }
-  return false;
+  return parse_keyword(word, {SpillDirection::normal, SpillDirection::up}, direction);
 }
 
 void validate_options(const VoxelizeOptions& o) {
