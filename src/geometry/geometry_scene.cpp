@@ -347,8 +347,8 @@ int GeometryScene::add_sphere(Vec3 center, float radius) {
 }
 
 int GeometryScene::add_box(const Bounds3& box) {
-  if (box.empty() || !(box.diagonal().x > 0.f && box.diagonal().y > 0.f && box.diagonal().z > 0.f) ||
-      !is_finite(box.lo) || !is_finite(box.hi))
+  const Vec3 size = box.diagonal();  // NaN fails the comparisons too
+  if (!(size.x > 0.f && size.y > 0.f && size.z > 0.f) || !is_finite(box.lo) || !is_finite(box.hi))
     throw std::invalid_argument("add_box: the box must be finite and have positive extent on every axis");
   const int id = int(impl_->shapes.size());
   const BoxShape b{box, id};
