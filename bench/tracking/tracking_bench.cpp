@@ -230,7 +230,7 @@ void BM_FreeFlight_Cloud(benchmark::State& state) {
   for (auto _ : state) {
     sample_T_maj(c[i].ray, c[i].t_max, rng.uniform(), rng, kWavelengths, *s.medium, s.prepared,
                  [&](const Vec3&, const MediumCollision& collision, const SampledSpectrum& sigma_maj,
-                     const SampledSpectrum&) {
+                     const MajorantTransmittance&) {
                    ++collisions;
                    return rng.uniform() * sigma_maj[0] >= collision.sigma_t()[0];  // continue on null collisions
                  });

@@ -111,10 +111,11 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
         // Delta tracking with the hero wavelength; other lanes are weighted (spectral MIS).
         bool scattered = false, terminated = false;
         const bool grey = media[medium].grey;
+        float r_l_grey_nulls = 1.f;  // grey media: the product of the null collisions' r_l factors
         const SampledSpectrum T_maj = sample_T_maj(
             ray, t_end, rng.uniform(), rng, lambda, scene.media[medium], media[medium],
             [&](const Vec3& p, const MediumCollision& c, const SampledSpectrum& sigma_maj,
-                const SampledSpectrum& T_m) {
+                const MajorantTransmittance& T_maj) {
               const SampledSpectrum sigma_t = c.sigma_t(grey ? 1 : n);  // grey: lane 0 stands for all
               const float sigma_s = c.sigma_s(0);
               const float p_absorb = (sigma_t[0] - sigma_s) / sigma_maj[0];
@@ -133,6 +134,7 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
                   return false;
                 }
                 const MediumProperties mp = c.properties();
+                const SampledSpectrum T_m = T_maj();
                 const float pdf = T_m[0] * mp.sigma_s[0];
                 beta *= T_m * mp.sigma_s / pdf;
                 r_u *= T_m * mp.sigma_s / pdf;
@@ -165,16 +167,18 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
               // (T_maj[0] sigma_n[0]); r_l follows ratio tracking's sigma_maj.
               if (grey) {
                 // Every lane's T_maj sigma_n is the pdf itself: beta and r_u keep
-                // their values, r_l changes by one factor (most collisions in a
-                // thick grey medium are null: the cloud benchmark).
+                // their values, r_l changes by one factor, applied once the walk
+                // ends (most collisions in a thick grey medium are null: the cloud
+                // benchmark). A scattering overwrites r_l, so it then never applies.
                 const float sigma_n0 = sigma_maj[0] - sigma_t[0];
                 if (!(sigma_n0 > 0.f)) {
                   terminated = true;
                   return false;
                 }
-                r_l *= sigma_maj[0] / sigma_n0;
+                r_l_grey_nulls *= sigma_maj[0] / sigma_n0;
                 return true;
               }
+              const SampledSpectrum T_m = T_maj();
               const SampledSpectrum sigma_n = clamp_zero(sigma_maj - sigma_t);
               const float pdf = T_m[0] * sigma_n[0];
               if (!(pdf > 0.f)) {
@@ -190,7 +194,7 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
         if (scattered) continue;
         beta *= T_maj / T_maj[0];
         r_u *= T_maj / T_maj[0];
-        r_l *= T_maj / T_maj[0];
+        r_l *= T_maj * (r_l_grey_nulls / T_maj[0]);
       }
     }
 

@@ -74,7 +74,8 @@ ShadowMis trace_shadow_mis(const Scene& scene, const ShadowOrigin& from, const V
       // collision multiplies by sigma_n/sigma_maj (pbrt-v4 SampleLd).
       const SampledSpectrum T_maj = sample_T_maj(
           ray, t_end, rng.uniform(), rng, lambda, scene.media[medium], media[medium],
-          [&](const Vec3&, const MediumCollision& c, const SampledSpectrum& sigma_maj, const SampledSpectrum& T_m) {
+          [&](const Vec3&, const MediumCollision& c, const SampledSpectrum& sigma_maj, const MajorantTransmittance& T_maj) {
+            const SampledSpectrum T_m = T_maj();
             const SampledSpectrum sigma_n = clamp_zero(sigma_maj - c.sigma_t());
             const float pdf = T_m[0] * sigma_maj[0];
             s.T_ray *= T_m * sigma_n / pdf;

@@ -9,8 +9,9 @@
 // - At each, callback(p, c, sigma_maj, T_maj) is called with the world-space
 //   point, the medium there (MediumCollision: its coefficients on demand), the
 //   segment's per-lane majorant and the per-lane majorant transmittance
-//   e^{-sigma_maj dt} since the previous collision (or the ray origin). The
-//   collision's pdf for the hero is T_maj[0] * sigma_maj[0];
+//   e^{-sigma_maj dt} since the previous collision (or the ray origin), which
+//   T_maj() evaluates on demand (T_maj.hero(): lane 0 only). The collision's
+//   pdf for the hero is T_maj.hero() * sigma_maj[0];
 //   sigma_n = sigma_maj - sigma_t >= 0.
 //   The callback returns false to stop (absorption, scattering, roulette).
 // - Returns the majorant transmittance from the last collision to t_max, or 1
@@ -19,6 +20,8 @@
 //   metres along the normalised direction, and t_max is the ray's own parameter.
 // Other lanes stay unbiased through the spectral-MIS ratios r_u, r_l the caller
 // keeps (pbrt-v4): beta *= T_maj * sigma / pdf with pdf from lane 0.
+#include <cmath>
+
 #include "media/medium.h"
 #include "spectra/sampled.h"
 #include "tracking/majorant_walk.h"
@@ -40,6 +43,24 @@ struct MediumCollision {
   MediumProperties properties() const { return medium.properties(values, prepared); }
 };
 
+// e^{-sigma_maj dt} since the previous collision, evaluated only when asked: a
+// null collision in a grey medium needs none of it (its weights are ratios of
+// equal lanes), and most collisions in thick grey media are null (the cloud
+// benchmark). In a grey medium only lane 0 of the optical depth is kept.
+class MajorantTransmittance {
+ public:
+  MajorantTransmittance(const SampledSpectrum& tau_maj, int lanes, int n) : tau_maj_(tau_maj), lanes_(lanes), n_(n) {}
+  SampledSpectrum operator()() const {
+    if (lanes_ == n_) return detail::exp_neg_lanes(tau_maj_, 1.f, n_);
+    return detail::carried_lanes(n_) * std::exp(-tau_maj_[0]);
+  }
+  float hero() const { return std::exp(-tau_maj_[0]); }
+
+ private:
+  const SampledSpectrum& tau_maj_;
+  int lanes_, n_;
+};
+
 template <typename F>
 SampledSpectrum sample_T_maj(Ray ray, float t_max, float u, Rng& rng, const SampledWavelengths& lambda,
                              const Medium& medium, const PreparedMedium& prepared, F callback) {
@@ -51,28 +72,35 @@ SampledSpectrum sample_T_maj(Ray ray, float t_max, float u, Rng& rng, const Samp
   ray.d = ray.d / len;
   const Ray ray_index = medium.index_ray(ray);
   const int channels = medium.channels();
+  // A grey medium: sigma_maj and tau_maj on lane 0, broadcast where a caller reads all lanes.
+  const int lanes = prepared.grey ? 1 : n;
 
-  // Majorant optical depth since the previous collision: one exp per collision,
-  // none per segment (cells are many where the medium is thick).
+  // Majorant optical depth since the previous collision: one exp per collision
+  // at most, none per segment (cells are many where the medium is thick).
   SampledSpectrum tau_maj, sigma_maj;
+  const MajorantTransmittance T_maj(tau_maj, lanes, n);
+  auto add_tau = [&](float dt) {
+    for (int i = 0; i < lanes; ++i) tau_maj[i] += sigma_maj[i] * dt;
+  };
   float t_last = 0.f;  // previous collision, or the start of the segment
   const bool finished = detail::walk_majorants(
       medium, ray_index, t_max, u, rng,
       [&](const MajorantSegment& s) {
-        sigma_maj = prepared.sigma_maj(s, channels);
+        sigma_maj = prepared.sigma_maj(s, channels, lanes);
+        if (lanes < n) sigma_maj = one * sigma_maj[0];
         t_last = s.t_min;
         return sigma_maj[0];
       },
       [&](float t) {
-        tau_maj += sigma_maj * (t - t_last);
+        add_tau(t - t_last);
         t_last = t;
         const MediumCollision c{medium, prepared, medium.channel_values(ray_index.at(t))};
-        if (!callback(ray.at(t), c, sigma_maj, detail::exp_neg_lanes(tau_maj, 1.f, n))) return false;
-        tau_maj = SampledSpectrum(0.f);
+        if (!callback(ray.at(t), c, sigma_maj, T_maj)) return false;
+        for (int i = 0; i < lanes; ++i) tau_maj[i] = 0.f;
         return true;
       },
-      [&](const MajorantSegment& s) { tau_maj += sigma_maj * (s.t_max - t_last); });
-  return finished ? detail::exp_neg_lanes(tau_maj, 1.f, n) : one;
+      [&](const MajorantSegment& s) { add_tau(s.t_max - t_last); });
+  return finished ? T_maj() : one;
 }
 
 }  // namespace chlorovdb

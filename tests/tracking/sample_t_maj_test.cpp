@@ -38,7 +38,7 @@ std::vector<double> first_real_collisions(const Slab& s, int n, uint64_t seed) {
   for (int i = 0; i < n; ++i) {
     double hit = 1e30;
     sample_T_maj(s.ray, s.t_max, rng.uniform(), rng, lambda, *s.medium, pm,
-                 [&](const Vec3& p, const MediumCollision& c, const SampledSpectrum& sigma_maj, const SampledSpectrum&) {
+                 [&](const Vec3& p, const MediumCollision& c, const SampledSpectrum& sigma_maj, const MajorantTransmittance&) {
                    if (rng.uniform() * sigma_maj[0] >= c.sigma_t()[0]) return true;  // null
                    hit = double(length(p - s.ray.o));
                    return false;
@@ -84,8 +84,8 @@ TEST(SampleTMaj, MajorantTransmittanceChainsAcrossSegments) {
   int collisions = 0;
   const SampledSpectrum last = sample_T_maj(s.ray, s.t_max, rng.uniform(), rng, lambda, *s.medium, pm,
                                             [&](const Vec3&, const MediumCollision&, const SampledSpectrum&,
-                                                const SampledSpectrum& T_maj) {
-                                              product *= T_maj;
+                                                const MajorantTransmittance& T_maj) {
+                                              product *= T_maj();
                                               ++collisions;
                                               return true;
                                             });
@@ -93,6 +93,44 @@ TEST(SampleTMaj, MajorantTransmittanceChainsAcrossSegments) {
   EXPECT_GT(collisions, 3);
   for (int l = 0; l < 4; ++l) EXPECT_NEAR(std::log(product[l]), -expected_log[l], 1e-3f * expected_log[l]);
   EXPECT_EQ(last[4], 0.f);
+}
+
+TEST(SampleTMaj, GreyMediaKeepOneLaneAndBroadcastIt) {
+  // Always null in a grey medium: T_maj() holds one value on every carried lane, its
+  // hero() is that value, and the chain multiplies to exp(-integral of sigma_maj).
+  const Slab s = piecewise_linear_slab(6.0, rough_profile());
+  double tau = 0;
+  const std::shared_ptr<Medium> grey = grey_medium_on(s, &tau);
+  const SampledWavelengths lambda = four_wavelengths();
+  const PreparedMedium pm = prepare(*grey, lambda);
+  ASSERT_TRUE(pm.grey);
+  const float len = chlorovdb::length(s.ray.d);
+  const Ray ri = grey->index_ray({s.ray.o, s.ray.d / len});
+  double expected_log = 0;
+  auto it = grey->majorants(ri, s.t_max * len);
+  while (auto seg = it.next()) expected_log += pm.sigma_maj(*seg, grey->channels())[0] * (seg->t_max - seg->t_min);
+  Rng rng(5, 0);
+  double log_product = 0;
+  int collisions = 0;
+  const SampledSpectrum last = sample_T_maj(
+      s.ray, s.t_max, rng.uniform(), rng, lambda, *grey, pm,
+      [&](const Vec3&, const MediumCollision&, const SampledSpectrum& sigma_maj, const MajorantTransmittance& T_maj) {
+        const SampledSpectrum T = T_maj();
+        for (int l = 1; l < 4; ++l) {
+          EXPECT_EQ(T[l], T[0]);
+          EXPECT_EQ(sigma_maj[l], sigma_maj[0]);
+        }
+        EXPECT_EQ(T[4], 0.f);
+        EXPECT_EQ(T_maj.hero(), T[0]);
+        log_product += std::log(double(T[0]));
+        ++collisions;
+        return true;
+      });
+  for (int l = 1; l < 4; ++l) EXPECT_EQ(last[l], last[0]);
+  EXPECT_EQ(last[4], 0.f);
+  log_product += std::log(double(last[0]));
+  EXPECT_GT(collisions, 3);
+  EXPECT_NEAR(log_product, -expected_log, 1e-3 * expected_log);
 }
 
 TEST(SampleTMaj, NoCoefficientExceedsItsMajorantInSpikyGrids) {
@@ -124,7 +162,7 @@ TEST(SampleTMaj, NoCoefficientExceedsItsMajorantInSpikyGrids) {
       const Vec3 o{-0.1f + 0.6f * rng.uniform(), -0.1f + 0.6f * rng.uniform(), -0.1f + 0.6f * rng.uniform()};
       const Ray ray{o, sample_uniform_sphere({rng.uniform(), rng.uniform()})};
       sample_T_maj(ray, 0.8f, rng.uniform(), rng, lambda, m, pm,
-                   [&](const Vec3&, const MediumCollision& c, const SampledSpectrum& sigma_maj, const SampledSpectrum&) {
+                   [&](const Vec3&, const MediumCollision& c, const SampledSpectrum& sigma_maj, const MajorantTransmittance&) {
                      const MediumProperties mp = c.properties();
                      const SampledSpectrum sigma_t = c.sigma_t();
                      for (int l = 0; l < 4; ++l) {
@@ -179,7 +217,7 @@ TEST(SampleTMaj, EmptySpaceCostsNoLookups) {
   int lookups = 0, in_empty = 0;
   for (int i = 0; i < 2000; ++i)
     sample_T_maj(ray, 0.3f, rng.uniform(), rng, lambda, m, pm,
-                 [&](const Vec3& p, const MediumCollision&, const SampledSpectrum&, const SampledSpectrum&) {
+                 [&](const Vec3& p, const MediumCollision&, const SampledSpectrum&, const MajorantTransmittance&) {
                    ++lookups;
                    const float x = p.x / 0.001f;
                    in_empty += x > 30.f && x < 225.f;
@@ -219,8 +257,10 @@ TEST(SampleTMaj, FurnaceWithAChromaticPureScattererReturnsOnePerLane) {
       bool scattered = false;
       const SampledSpectrum T_maj = sample_T_maj(
           ray, t1, rng.uniform(), rng, lambda, m, pm,
-          [&](const Vec3& p, const MediumCollision& c, const SampledSpectrum& sigma_maj, const SampledSpectrum& T) {
+          [&](const Vec3& p, const MediumCollision& c, const SampledSpectrum& sigma_maj,
+              const MajorantTransmittance& T_m) {
             const MediumProperties mp = c.properties();
+            const SampledSpectrum T = T_m();
             if (rng.uniform() * sigma_maj[0] < mp.sigma_s[0]) {
               beta *= T * mp.sigma_s / (T[0] * mp.sigma_s[0]);
               const MediumPhaseSample ps = phase_sample(mp.phase, -ray.d, {rng.uniform(), rng.uniform()});

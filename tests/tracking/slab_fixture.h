@@ -115,6 +115,23 @@ inline Slab piecewise_linear_slab(double tau_hero, const std::vector<double>& va
   return s;
 }
 
+// The slab's grid holding a grey absorber and grey particles instead of the ramp
+// pigment in water (prepare() finds it grey); *tau: its exact optical depth along s.ray.
+inline std::shared_ptr<Medium> grey_medium_on(const Slab& s, double* tau) {
+  const Field& field = s.medium->desc().pigments[0].concentration;
+  const double length = double(s.t_max) * double(chlorovdb::length(s.ray.d));
+  // scale x integral of the profile along the ray, from the ramp slab's exact depth.
+  const double c_integral = (s.tau_to(length, 0) - sigma_t_of(0.0, 0) * length) / (sigma_t_of(1.0, 0) - sigma_t_of(0.0, 0));
+  MediumDesc d;
+  d.solvent = Solvent::none();
+  const float eps = 25000.f;  // L/(mol cm): sigma_a = 100 ln10 eps c; tau about 2 on the rough slab
+  d.pigments.push_back({{"grey", Spectrum::constant(eps), Spectrum::constant(0.f), 0.f}, field});
+  d.particle_sigma_s = Field::from_grid(field.grid, 3.f * field.scale);  // 3 /m per mol/L
+  d.majorant_voxels_per_cell = s.medium->desc().majorant_voxels_per_cell;
+  *tau = (100.0 * std::log(10.0) * eps + 3.0) * c_integral;
+  return std::make_shared<Medium>(d);
+}
+
 // Piecewise-linear profiles: a rough one with a run of empty voxels and sharp
 // kinks, and a gentle one (for thick media, where only a small residual is tracked).
 inline std::vector<double> rough_profile() {

@@ -147,17 +147,9 @@ TEST(Transmittance, GreyMediaTrackOneLaneForAll) {
   // ramp pigment in water: prepare() finds it grey, every estimator then returns one
   // value on all carried lanes, unbiased against the exact optical depth.
   const Slab s = piecewise_linear_slab(2.0, rough_profile());
-  const Field& field = s.medium->desc().pigments[0].concentration;
-  const double length = 2.0 * double(chlorovdb::length(s.ray.d));
-  // scale x integral of the profile along the ray, from the ramp slab's exact depth.
-  const double c_integral = (s.tau_to(length, 0) - sigma_t_of(0.0, 0) * length) / (sigma_t_of(1.0, 0) - sigma_t_of(0.0, 0));
-  MediumDesc d;
-  d.solvent = Solvent::none();
-  const float eps = 25000.f;  // L/(mol cm): sigma_a = 100 ln10 eps c; tau about 2
-  d.pigments.push_back({{"grey", Spectrum::constant(eps), Spectrum::constant(0.f), 0.f}, field});
-  d.particle_sigma_s = Field::from_grid(field.grid, 3.f * field.scale);  // 3 /m per mol/L
-  const Medium grey(d);
-  const double tau = (100.0 * std::log(10.0) * eps + 3.0) * c_integral;
+  double tau = 0;
+  const std::shared_ptr<Medium> grey_medium = grey_medium_on(s, &tau);
+  const Medium& grey = *grey_medium;
   ASSERT_GT(tau, 0.5);
   ASSERT_LT(tau, 5.0);
 
