@@ -63,6 +63,7 @@ Medium::Medium(MediumDesc desc) : desc_(std::move(desc)) {
     c.same_space = c.grid_from_medium_index.is_identity();
     grids.push_back(c.grid);
   }
+  if (channels_.size() == 1 && channels_[0].same_space) single_grid_ = channels_[0].grid;
   majorants_ = MajorantGrid(grids, desc_.majorant_voxels_per_cell);
 }
 

@@ -103,6 +103,10 @@ struct PreparedMedium {
   template <typename Values>
   SampledSpectrum sigma_t_for(const Values& values, int channels, int lanes) const {
     SampledSpectrum s;
+    if (channels == 1) {  // one grid, the common case: no inner loop
+      for (int i = 0; i < lanes; ++i) s[i] = sigma_t_constant[i] + channel_sigma_t[0][i] * values[0];
+      return s;
+    }
     for (int i = 0; i < lanes; ++i) {
       float sigma = sigma_t_constant[i];
       for (int c = 0; c < channels; ++c) sigma += channel_sigma_t[c][i] * values[c];
@@ -177,6 +181,7 @@ class Medium {
 
   MediumDesc desc_;
   std::vector<Channel> channels_;
+  const VoxelGrid* single_grid_ = nullptr;  // the only channel, when it needs no transform
   // Per pigment: its channel (-1: constant) and the factor to mol/L or the constant itself.
   std::array<int, kMaxPigments> pigment_channel_{};
   std::array<float, kMaxPigments> pigment_scale_{}, pigment_constant_{};
@@ -197,6 +202,10 @@ inline MediumProperties sample_point(const Medium& medium, const Vec3& p_world, 
 
 inline Medium::ChannelValues Medium::channel_values(const Vec3& p_index) const {
   ChannelValues values{};
+  if (single_grid_) {  // one grid in the medium's own index space, the common case
+    values[0] = single_grid_->lookup(p_index, desc_.interpolation);
+    return values;
+  }
   for (size_t c = 0; c < channels_.size(); ++c) {
     const Channel& ch = channels_[c];
     const Vec3 p = ch.same_space ? p_index : ch.grid_from_medium_index.point(p_index);
