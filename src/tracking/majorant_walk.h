@@ -6,6 +6,7 @@
 // callbacks. Everything is inlined: no virtual call or allocation per collision.
 #include <optional>
 
+#include "core/exponential.h"
 #include "core/rng.h"
 #include "core/sampling.h"
 #include "media/medium.h"
@@ -22,9 +23,9 @@ bool walk_majorants(const Medium& medium, const Ray& ray_index, float t_max, flo
   // The optical depth (at the estimator's rate) left to the next tentative collision.
   // Free flights are memoryless, so one exponential sample carries across segments
   // and a segment without a collision costs no log and no random number.
-  // sample_exponential, with logf instead of log1pf: 1 - u is exact for Rng's
-  // 24-bit u, so log1pf's accuracy near u = 0 buys nothing here, and logf is
-  // several times faster (a tenth of the time of a transmittance estimate).
+  // The first from u (the caller's sample), with logf instead of log1pf: 1 - u
+  // is exact for Rng's 24-bit u, so log1pf's accuracy near u = 0 buys nothing.
+  // The rest, one per collision, by the ziggurat: no log at all (core/exponential.h).
   float tau = -std::log(1.f - u);
   MajorantIterator it = medium.majorants(ray_index, t_max);
   while (const std::optional<MajorantSegment> seg = it.next()) {
@@ -39,7 +40,7 @@ bool walk_majorants(const Medium& medium, const Ray& ray_index, float t_max, flo
         }
         t = t_next;
         if (!collide(t)) return false;
-        tau = -std::log(1.f - rng.uniform());
+        tau = sample_standard_exponential(rng);
       }
     }
     end(*seg);
