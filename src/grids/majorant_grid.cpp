@@ -225,6 +225,11 @@ MajorantSegment MajorantIterator::segment(const Piece& p) const {
     for (int k = 0; k < n; ++k) s.c_max[k] = s.c_min[k] = grid_->background_[k];
   } else {
     const float* b = grid_->bounds_.data() + size_t(p.cell) * grid_->stride();
+    if (n == 1) {  // one grid, the common case: gcc turns the loop below into two memcpy calls
+      s.c_max[0] = b[0];
+      s.c_min[0] = b[1];
+      return s;
+    }
     for (int k = 0; k < n; ++k) {
       s.c_max[k] = b[k];
       s.c_min[k] = b[n + k];

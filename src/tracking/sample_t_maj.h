@@ -96,7 +96,8 @@ SampledSpectrum sample_T_maj(Ray ray, float t_max, float u, Rng& rng, const Samp
         t_last = t;
         const MediumCollision c{medium, prepared, medium.channel_values(ray_index.at(t))};
         if (!callback(ray.at(t), c, sigma_maj, T_maj)) return false;
-        for (int i = 0; i < lanes; ++i) tau_maj[i] = 0.f;
+        if (lanes == 1) tau_maj[0] = 0.f;  // not a loop: gcc makes that a memset call
+        else tau_maj = SampledSpectrum(0.f);
         return true;
       },
       [&](const MajorantSegment& s) { add_tau(s.t_max - t_last); });
