@@ -116,9 +116,9 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
             ray, t_end, rng.uniform(), rng, lambda, scene.media[medium], media[medium],
             [&](const Vec3& p, const MediumCollision& c, const SampledSpectrum& sigma_maj,
                 const MajorantTransmittance& T_maj) {
-              const SampledSpectrum sigma_t = c.sigma_t(grey ? 1 : n);  // grey: lane 0 stands for all
+              const float sigma_t0 = c.sigma_t(0);  // the hero decides
               const float sigma_s = c.sigma_s(0);
-              const float p_absorb = (sigma_t[0] - sigma_s) / sigma_maj[0];
+              const float p_absorb = (sigma_t0 - sigma_s) / sigma_maj[0];
               const float p_scatter = sigma_s / sigma_maj[0];
               const float u = rng.uniform();
               if (u < p_absorb) {
@@ -170,7 +170,7 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
                 // their values, r_l changes by one factor, applied once the walk
                 // ends (most collisions in a thick grey medium are null: the cloud
                 // benchmark). A scattering overwrites r_l, so it then never applies.
-                const float sigma_n0 = sigma_maj[0] - sigma_t[0];
+                const float sigma_n0 = sigma_maj[0] - sigma_t0;
                 if (!(sigma_n0 > 0.f)) {
                   terminated = true;
                   return false;
@@ -179,7 +179,7 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
                 return true;
               }
               const SampledSpectrum T_m = T_maj();
-              const SampledSpectrum sigma_n = clamp_zero(sigma_maj - sigma_t);
+              const SampledSpectrum sigma_n = clamp_zero(sigma_maj - c.sigma_t());
               const float pdf = T_m[0] * sigma_n[0];
               if (!(pdf > 0.f)) {
                 terminated = true;

@@ -103,16 +103,17 @@ struct PreparedMedium {
   template <typename Values>
   SampledSpectrum sigma_t_for(const Values& values, int channels, int lanes) const {
     SampledSpectrum s;
-    if (channels == 1) {  // one grid, the common case: no inner loop
-      for (int i = 0; i < lanes; ++i) s[i] = sigma_t_constant[i] + channel_sigma_t[0][i] * values[0];
-      return s;
-    }
-    for (int i = 0; i < lanes; ++i) {
-      float sigma = sigma_t_constant[i];
-      for (int c = 0; c < channels; ++c) sigma += channel_sigma_t[c][i] * values[c];
-      s[i] = sigma;
-    }
+    for (int i = 0; i < lanes; ++i) s[i] = sigma_t_lane(values, channels, i);
     return s;
+  }
+  // One lane of it: a null collision in a grey medium, or a tracker that works lane
+  // by lane, needs no SampledSpectrum (building one costs as much as the lookup).
+  template <typename Values>
+  float sigma_t_lane(const Values& values, int channels, int lane) const {
+    float sigma = sigma_t_constant[lane];
+    if (channels == 1) return sigma + channel_sigma_t[0][lane] * values[0];  // one grid, the common case
+    for (int c = 0; c < channels; ++c) sigma += channel_sigma_t[c][lane] * values[c];
+    return sigma;
   }
 };
 
@@ -148,11 +149,11 @@ class Medium {
   // follows from them, so a caller that needs several looks up once.
   using ChannelValues = std::array<float, kMaxMajorantChannels>;
   inline ChannelValues channel_values(const Vec3& p_index) const;
-  SampledSpectrum sigma_t(const ChannelValues& v, const PreparedMedium& prepared, int lanes) const {
-    return prepared.sigma_t_for(v, int(channels_.size()), lanes);
-  }
   SampledSpectrum sigma_t(const ChannelValues& v, const PreparedMedium& prepared) const {
-    return sigma_t(v, prepared, prepared.lambda_count);
+    return prepared.sigma_t_for(v, int(channels_.size()), prepared.lambda_count);
+  }
+  float sigma_t(const ChannelValues& v, const PreparedMedium& prepared, int lane) const {
+    return prepared.sigma_t_lane(v, int(channels_.size()), lane);
   }
   // sigma_s on one lane (the hero's, to choose between absorption, scattering and null).
   float sigma_s(const ChannelValues& v, const PreparedMedium& prepared, int lane) const {

@@ -38,7 +38,7 @@ struct MediumCollision {
   Medium::ChannelValues values;
 
   SampledSpectrum sigma_t() const { return medium.sigma_t(values, prepared); }
-  SampledSpectrum sigma_t(int lanes) const { return medium.sigma_t(values, prepared, lanes); }  // the first lanes
+  float sigma_t(int lane) const { return medium.sigma_t(values, prepared, lane); }
   float sigma_s(int lane) const { return medium.sigma_s(values, prepared, lane); }
   MediumProperties properties() const { return medium.properties(values, prepared); }
 };

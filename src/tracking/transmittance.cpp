@@ -66,10 +66,11 @@ SampledSpectrum ratio_tracking(const Track& k, Rng& rng) {
         return rate;
       },
       [&](float t) {
-        const SampledSpectrum sigma_t = k.medium.sigma_t(k.medium.channel_values(k.ray_index.at(t)), k.prepared, k.n);
+        const Medium::ChannelValues v = k.medium.channel_values(k.ray_index.at(t));
         float T_max = 0.f;
         for (int i = 0; i < k.n; ++i) {  // rounding may push sigma_t a hair past the majorant: clamp
-          const float sigma_r = kResidual ? sigma_t[i] - sigma_c[i] : sigma_t[i];
+          const float sigma_t = k.medium.sigma_t(v, k.prepared, i);
+          const float sigma_r = kResidual ? sigma_t - sigma_c[i] : sigma_t;
           T[i] *= std::max(0.f, 1.f - sigma_r * inv_rate);
           T_max = std::max(T_max, T[i]);
         }
@@ -110,10 +111,10 @@ SampledSpectrum delta_tracking(const Track& k, Rng& rng) {
         return rate;
       },
       [&](float t) {
-        const SampledSpectrum sigma_t = k.medium.sigma_t(k.medium.channel_values(k.ray_index.at(t)), k.prepared, k.n);
+        const Medium::ChannelValues v = k.medium.channel_values(k.ray_index.at(t));
         float p_null[kMaxWavelengths], P = 0.f;
         for (int i = 0; i < k.n; ++i) {
-          p_null[i] = std::max(0.f, 1.f - sigma_t[i] * inv_rate);
+          p_null[i] = std::max(0.f, 1.f - k.medium.sigma_t(v, k.prepared, i) * inv_rate);
           P = std::max(P, p_null[i]);
         }
         if (!(rng.uniform() < P)) return false;  // a real collision: the path is absorbed
