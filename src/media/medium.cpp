@@ -117,6 +117,16 @@ PreparedMedium prepare(const Medium& medium, const SampledWavelengths& lambda) {
   return pm;
 }
 
+Medium::ChannelValues Medium::channel_values_of_each_grid(const Vec3& p_index) const {
+  ChannelValues values{};
+  for (size_t c = 0; c < channels_.size(); ++c) {
+    const Channel& ch = channels_[c];
+    const Vec3 p = ch.same_space ? p_index : ch.grid_from_medium_index.point(p_index);
+    values[c] = ch.grid->lookup(p, desc_.interpolation);
+  }
+  return values;
+}
+
 MediumProperties Medium::properties(const ChannelValues& v, const PreparedMedium& prepared) const {
   MediumProperties mp;
   mp.phase.particle = desc_.particle_phase;

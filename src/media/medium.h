@@ -169,6 +169,9 @@ class Medium {
 
  private:
   friend PreparedMedium prepare(const Medium& medium, const SampledWavelengths& lambda);
+  // channel_values for several grids or a transformed one: out of line, so the
+  // one-grid path stays small enough to inline at every collision.
+  ChannelValues channel_values_of_each_grid(const Vec3& p_index) const;
   float sigma_s_particle(const ChannelValues& v, const PreparedMedium& prepared, int lane) const {
     const float particle_value = particle_channel_ < 0 ? 0.f : v[particle_channel_];
     return prepared.sigma_s_particle_constant[lane] + prepared.sigma_s_particle_per_value[lane] * particle_value;
@@ -207,12 +210,7 @@ inline Medium::ChannelValues Medium::channel_values(const Vec3& p_index) const {
     values[0] = single_grid_->lookup(p_index, desc_.interpolation);
     return values;
   }
-  for (size_t c = 0; c < channels_.size(); ++c) {
-    const Channel& ch = channels_[c];
-    const Vec3 p = ch.same_space ? p_index : ch.grid_from_medium_index.point(p_index);
-    values[c] = ch.grid->lookup(p, desc_.interpolation);
-  }
-  return values;
+  return channel_values_of_each_grid(p_index);
 }
 
 }  // namespace chlorovdb
