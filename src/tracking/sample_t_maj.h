@@ -10,8 +10,8 @@
 //   point, the medium there (MediumCollision: its coefficients on demand), the
 //   segment's per-lane majorant and the per-lane majorant transmittance
 //   e^{-sigma_maj dt} since the previous collision (or the ray origin), which
-//   T_maj() evaluates on demand (T_maj.hero(): lane 0 only). The collision's
-//   pdf for the hero is T_maj.hero() * sigma_maj[0];
+//   T_maj() evaluates on demand. The collision's pdf for the hero is
+//   T_maj()[0] * sigma_maj[0];
 //   sigma_n = sigma_maj - sigma_t >= 0.
 //   The callback returns false to stop (absorption, scattering, roulette).
 // - Returns the majorant transmittance from the last collision to t_max, or 1
@@ -54,7 +54,6 @@ class MajorantTransmittance {
     if (lanes_ == n_) return detail::exp_neg_lanes(tau_maj_, 1.f, n_);
     return detail::carried_lanes(n_) * std::exp(-tau_maj_[0]);
   }
-  float hero() const { return std::exp(-tau_maj_[0]); }
 
  private:
   const SampledSpectrum& tau_maj_;
