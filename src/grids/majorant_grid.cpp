@@ -45,7 +45,7 @@ MajorantGrid::MajorantGrid(std::span<const VoxelGrid* const> channels, int voxel
   for (size_t k = 0; k < channels.size(); ++k) {
     channel_from_majorant[k] = channels[k]->index_from_world() * channels[0]->world_from_index();
     same_space[k] = channel_from_majorant[k].is_identity();
-    background_[k] = channels[k]->background();
+    background_[k] = background_[channels_ + k] = channels[k]->background();
     if (background_[k] != 0.f) background_empty_ = false;
   }
 
@@ -217,32 +217,15 @@ bool MajorantIterator::pull(Piece* piece) {
 }
 
 MajorantSegment MajorantIterator::segment(const Piece& p) const {
-  MajorantSegment s;
-  s.t_min = p.t0;
-  s.t_max = p.t1;
-  const int n = grid_->channels_;
-  if (p.cell < 0) {
-    for (int k = 0; k < n; ++k) s.c_max[k] = s.c_min[k] = grid_->background_[k];
-  } else {
-    const float* b = grid_->bounds_.data() + size_t(p.cell) * grid_->stride();
-    if (n == 1) {  // one grid, the common case: gcc turns the loop below into two memcpy calls
-      s.c_max[0] = b[0];
-      s.c_min[0] = b[1];
-      return s;
-    }
-    for (int k = 0; k < n; ++k) {
-      s.c_max[k] = b[k];
-      s.c_min[k] = b[n + k];
-    }
-  }
-  return s;
+  const float* b = p.cell < 0 ? grid_->background_.data() : grid_->bounds_.data() + size_t(p.cell) * grid_->stride();
+  return {p.t0, p.t1, b, b + grid_->channels_};
 }
 
 std::optional<MajorantSegment> MajorantIterator::next() {
   Piece p;
-  if (pending_) {
-    p = *pending_;
-    pending_.reset();
+  if (has_pending_) {
+    p = pending_;
+    has_pending_ = false;
   } else if (!pull(&p)) {
     return std::nullopt;
   }
@@ -252,6 +235,7 @@ std::optional<MajorantSegment> MajorantIterator::next() {
   while (pull(&q)) {
     if (!empty(q)) {
       pending_ = q;
+      has_pending_ = true;
       break;
     }
     p.t1 = q.t1;

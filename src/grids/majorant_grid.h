@@ -29,8 +29,11 @@ inline constexpr int kMaxMajorantChannels = 5;
 
 struct MajorantSegment {
   float t_min = 0.f, t_max = 0.f;  // in the parameter of the ray given to segments()
-  // Per channel: no lookup in (t_min, t_max) returns more than c_max or less than c_min.
-  std::array<float, kMaxMajorantChannels> c_max{}, c_min{};
+  // Per channel k: no lookup in (t_min, t_max) returns more than c_max[k] or less
+  // than c_min[k]. Both point into the grid (valid while it lives): a segment is
+  // made for every cell a ray crosses, so it copies nothing.
+  const float* c_max = nullptr;
+  const float* c_min = nullptr;
 };
 
 class MajorantIterator;
@@ -71,7 +74,8 @@ class MajorantGrid {
   // Per cell: 0 if some channel's max is non-zero; else the Chebyshev distance in
   // cells to the nearest such cell (capped at 255; 255 too if there is none).
   std::vector<uint8_t> empty_radius_;
-  std::array<float, kMaxMajorantChannels> background_{};
+  // The bounds outside the cells, laid out like a cell's: c_max[channels], then c_min[channels].
+  std::array<float, 2 * kMaxMajorantChannels> background_{};
   bool background_empty_ = true;
 };
 
@@ -108,7 +112,8 @@ class MajorantIterator {
   int64_t index_ = 0, index_step_[3] = {};  // linear index of cell_ and its change per step
   float next_crossing_[3] = {}, delta_t_[3] = {};
   float t_ = 0.f;
-  std::optional<Piece> pending_;
+  Piece pending_{};
+  bool has_pending_ = false;
 };
 
 inline MajorantIterator MajorantGrid::segments(const Ray& ray_index, float t_max) const {

@@ -82,17 +82,22 @@ SampledSpectrum sample_T_maj(Ray ray, float t_max, float u, Rng& rng, const Samp
     for (int i = 0; i < lanes; ++i) tau_maj[i] += sigma_maj[i] * dt;
   };
   float t_last = 0.f;  // previous collision, or the start of the segment
+  bool broadcast = false;  // grey: sigma_maj's lane 0 still to be copied to the others
   const bool finished = detail::walk_majorants(
       medium, ray_index, t_max, u, rng,
       [&](const MajorantSegment& s) {
-        sigma_maj = prepared.sigma_maj(s, channels, lanes);
-        if (lanes < n) sigma_maj = one * sigma_maj[0];
+        for (int i = 0; i < lanes; ++i) sigma_maj[i] = prepared.sigma_t_lane(s.c_max, channels, i);
+        broadcast = lanes < n;
         t_last = s.t_min;
         return sigma_maj[0];
       },
       [&](float t) {
         add_tau(t - t_last);
         t_last = t;
+        if (broadcast) {  // at the segment's first collision: most segments have none
+          for (int i = lanes; i < n; ++i) sigma_maj[i] = sigma_maj[0];
+          broadcast = false;
+        }
         const MediumCollision c{medium, prepared, medium.channel_values(ray_index.at(t))};
         if (!callback(ray.at(t), c, sigma_maj, T_maj)) return false;
         if (lanes == 1) tau_maj[0] = 0.f;  // not a loop: gcc makes that a memset call

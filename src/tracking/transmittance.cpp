@@ -45,23 +45,29 @@ void cut_unbounded(const SampledSpectrum& sigma, int n, SampledSpectrum* T) {
 // argument, so plain ratio tracking pays nothing for the control).
 template <bool kResidual>
 SampledSpectrum ratio_tracking(const Track& k, Rng& rng) {
-  // T: the tracked (ratio) factor; T_c: the control factor, integrated exactly.
-  SampledSpectrum T = detail::carried_lanes(k.n), T_c = T, sigma_c;
+  // T: the tracked (ratio) factor; tau_c: the control's optical depth, integrated
+  // exactly (one exp at the end, none per segment).
+  SampledSpectrum T = detail::carried_lanes(k.n), tau_c, sigma_c;
   float inv_rate = 0.f;
   detail::walk_majorants(
       k.medium, k.ray_index, k.t_end, rng.uniform(), rng,
       [&](const MajorantSegment& s) {
-        const SampledSpectrum sigma_maj = k.prepared.sigma_maj(s, k.channels, k.n);
         if (k.unbounded && s.t_max >= k.t_end) {
-          cut_unbounded(sigma_maj, k.n, &T);
+          cut_unbounded(k.prepared.sigma_maj(s, k.channels, k.n), k.n, &T);
           return 0.f;
         }
-        if constexpr (kResidual) {
-          // The control part is integrated exactly; only the residual is tracked.
-          sigma_c = k.prepared.sigma_min(s, k.channels, k.n);
-          T_c *= detail::exp_neg_lanes(sigma_c, s.t_max - s.t_min, k.n);
+        float rate = 0.f;
+        for (int i = 0; i < k.n; ++i) {
+          const float sigma_maj = k.prepared.sigma_t_lane(s.c_max, k.channels, i);
+          if constexpr (kResidual) {
+            // The control part is integrated exactly; only the residual is tracked.
+            sigma_c[i] = k.prepared.sigma_t_lane(s.c_min, k.channels, i);
+            tau_c[i] += sigma_c[i] * (s.t_max - s.t_min);
+            rate = std::max(rate, sigma_maj - sigma_c[i]);
+          } else {
+            rate = std::max(rate, sigma_maj);
+          }
         }
-        const float rate = max_lane(kResidual ? sigma_maj - sigma_c : sigma_maj, k.n);
         inv_rate = 1.f / rate;
         return rate;
       },
@@ -91,17 +97,18 @@ SampledSpectrum ratio_tracking(const Track& k, Rng& rng) {
         return true;
       },
       [](const MajorantSegment&) {});
-  if constexpr (kResidual) T *= T_c;
+  if constexpr (kResidual)
+    if (!T.is_black()) T *= detail::exp_neg_lanes(tau_c, 1.f, k.n);
   return T;
 }
 
 SampledSpectrum delta_tracking(const Track& k, Rng& rng) {
-  SampledSpectrum T = detail::carried_lanes(k.n), sigma_maj;
+  SampledSpectrum T = detail::carried_lanes(k.n);
   float inv_rate = 0.f;
   const bool escaped = detail::walk_majorants(
       k.medium, k.ray_index, k.t_end, rng.uniform(), rng,
       [&](const MajorantSegment& s) {
-        sigma_maj = k.prepared.sigma_maj(s, k.channels, k.n);
+        const SampledSpectrum sigma_maj = k.prepared.sigma_maj(s, k.channels, k.n);
         if (k.unbounded && s.t_max >= k.t_end) {
           cut_unbounded(sigma_maj, k.n, &T);
           return 0.f;
