@@ -188,19 +188,7 @@ bool MajorantIterator::pull(Piece* piece) {
           return true;
         }
       }
-      const int a = next_crossing_[0] < next_crossing_[1] ? (next_crossing_[0] < next_crossing_[2] ? 0 : 2)
-                                                          : (next_crossing_[1] < next_crossing_[2] ? 1 : 2);
-      // Rounding can put a crossing a hair behind t_: never step backwards.
-      const float t_end = std::max(t_, std::min(next_crossing_[a], t_exit_));
-      *piece = {t_, t_end, index};
-      t_ = t_end;
-      cell_[a] += step_[a];
-      index_ += index_step_[a];
-      next_crossing_[a] += delta_t_[a];
-      if (t_end >= t_exit_ || cell_[a] == stop_[a]) {
-        t_exit_ = t_end;  // the stretch after the cells starts exactly where the last cell ended
-        stage_ = Stage::after;
-      }
+      *piece = step();
       return true;
     }
     case Stage::after:
@@ -216,12 +204,7 @@ bool MajorantIterator::pull(Piece* piece) {
   return false;
 }
 
-MajorantSegment MajorantIterator::segment(const Piece& p) const {
-  const float* b = p.cell < 0 ? grid_->background_.data() : grid_->bounds_.data() + size_t(p.cell) * grid_->stride();
-  return {p.t0, p.t1, b, b + grid_->channels_};
-}
-
-std::optional<MajorantSegment> MajorantIterator::next() {
+std::optional<MajorantSegment> MajorantIterator::next_slow() {
   Piece p;
   if (has_pending_) {
     p = pending_;

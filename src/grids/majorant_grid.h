@@ -14,6 +14,7 @@
 // non-empty one, so the cube of half-width r - 1 around it is empty and the
 // ray leaves that cube in one step. Rounding may end a jump a hair inside a
 // non-empty cell; lookups there read only voxels of the empty cell's own stencil.
+#include <algorithm>
 #include <array>
 #include <optional>
 #include <span>
@@ -84,8 +85,12 @@ class MajorantIterator {
   MajorantIterator() = default;  // yields nothing
   MajorantIterator(const MajorantGrid* grid, const Ray& ray_index, float t_max);
 
-  // The next segment, or nullopt once [0, t_max] is covered.
-  std::optional<MajorantSegment> next();
+  // The next segment, or nullopt once [0, t_max] is covered. Inline for the
+  // common case, a non-empty cell inside the grid: a thick medium crosses many.
+  std::optional<MajorantSegment> next() {
+    if (stage_ == Stage::cells && !has_pending_ && grid_->empty_radius_[index_] == 0) return segment(step());
+    return next_slow();
+  }
 
  private:
   // A piece of the ray: one cell, or (cell < 0) a stretch outside the grid.
@@ -93,11 +98,32 @@ class MajorantIterator {
     float t0, t1;
     int64_t cell;
   };
+  std::optional<MajorantSegment> next_slow();
   bool pull(Piece* piece);
+  // One DDA step: the piece of the current cell, then move to the next cell.
+  Piece step() {
+    const int a = next_crossing_[0] < next_crossing_[1] ? (next_crossing_[0] < next_crossing_[2] ? 0 : 2)
+                                                        : (next_crossing_[1] < next_crossing_[2] ? 1 : 2);
+    // Rounding can put a crossing a hair behind t_: never step backwards.
+    const float t_end = std::max(t_, std::min(next_crossing_[a], t_exit_));
+    const Piece piece{t_, t_end, index_};
+    t_ = t_end;
+    cell_[a] += step_[a];
+    index_ += index_step_[a];
+    next_crossing_[a] += delta_t_[a];
+    if (t_end >= t_exit_ || cell_[a] == stop_[a]) {
+      t_exit_ = t_end;  // the stretch after the cells starts exactly where the last cell ended
+      stage_ = Stage::after;
+    }
+    return piece;
+  }
   bool empty(const Piece& p) const {
     return p.cell < 0 ? grid_->background_empty_ : grid_->empty_radius_[p.cell] > 0;
   }
-  MajorantSegment segment(const Piece& p) const;
+  MajorantSegment segment(const Piece& p) const {
+    const float* b = p.cell < 0 ? grid_->background_.data() : grid_->bounds_.data() + size_t(p.cell) * grid_->stride();
+    return {p.t0, p.t1, b, b + grid_->channels_};
+  }
   // (Re)start the DDA in the cell holding the ray at parameter t.
   void enter_cells(float t);
 
