@@ -4,6 +4,7 @@
 // thread as NanoVDB prescribes). Two fields: a smooth cloud (most voxels
 // non-zero) and sparse blobs (~3 % non-zero); two access patterns: points
 // along rays in 0.5-voxel steps (what tracking does) and uniformly random points.
+// Also: the cost of building a majorant grid over them, per cell size.
 #include <benchmark/benchmark.h>
 
 #include <cmath>
@@ -17,6 +18,7 @@
 
 #include "core/rng.h"
 #include "core/sampling.h"
+#include "grids/majorant_grid.h"
 #include "grids/voxel_grid.h"
 
 using namespace chlorovdb;
@@ -163,6 +165,17 @@ void BM_NanoVDB_Nearest(benchmark::State& state) {
       f.nano.size());
 }
 
+// Building the majorant grid over a 256^3 field at one cell size: a medium that
+// chooses its cell size (media/medium.cpp) builds one per candidate, 4 to 16 voxels.
+void BM_MajorantGrid_Build(benchmark::State& state) {
+  const Field& f = field(int(state.range(0)));
+  const VoxelGrid* grids[] = {&f.bricked};
+  for (auto _ : state) {
+    MajorantGrid m(grids, int(state.range(1)));
+    benchmark::DoNotOptimize(m.resolution());
+  }
+}
+
 // Args: field (0 cloud, 1 sparse blobs), pattern (0 along rays, 1 random).
 void args(benchmark::internal::Benchmark* b) {
   b->ArgNames({"field", "random"});
@@ -176,4 +189,8 @@ BENCHMARK(BM_DenseArray_Trilinear)->Apply(args);
 BENCHMARK(BM_VoxelGrid_Trilinear)->Apply(args);
 BENCHMARK(BM_NanoVDB_Trilinear)->Apply(args);
 BENCHMARK(BM_VoxelGrid_Nearest)->Apply(args);
+BENCHMARK(BM_MajorantGrid_Build)
+    ->ArgNames({"field", "voxels_per_cell"})
+    ->ArgsProduct({{0, 1}, {4, 6, 8, 12, 16}})
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_NanoVDB_Nearest)->Apply(args);

@@ -183,13 +183,13 @@ void run_transmittance(benchmark::State& state, const Scenario& s, Transmittance
 
 // Args: estimator, mean hero tau of the cloud.
 void BM_Transmittance_Cloud(benchmark::State& state) {
-  run_transmittance(state, scenario(0, double(state.range(1)), kDefaultMajorantVoxelsPerCell),
+  run_transmittance(state, scenario(0, double(state.range(1)), 8),
                     kEstimators[state.range(0)]);
 }
 
 // Args: estimator, percent of voxels active (density 1, sigma_t 5 /m).
 void BM_Transmittance_Sparsity(benchmark::State& state) {
-  run_transmittance(state, scenario(int(state.range(1)), 0.0, kDefaultMajorantVoxelsPerCell),
+  run_transmittance(state, scenario(int(state.range(1)), 0.0, 8),
                     kEstimators[state.range(0)]);
 }
 
@@ -243,7 +243,7 @@ void BM_FreeFlight_Cloud(benchmark::State& state) {
 // The floor: concentration lookups along the chords in 0.5-voxel steps, raw
 // (VoxelGrid::trilinear) and as a medium's per-lane sigma_t.
 void BM_GridLookup_Cloud(benchmark::State& state) {
-  const Scenario& s = scenario(0, 10.0, kDefaultMajorantVoxelsPerCell);
+  const Scenario& s = scenario(0, 10.0, 8);
   const VoxelGrid& grid = *s.medium->desc().pigments[0].concentration.grid;
   std::vector<Vec3> pts;
   for (const Chord& c : chords()) {

@@ -116,6 +116,20 @@ void MajorantGrid::compute_empty_radii() {
   }
 }
 
+double MajorantGrid::tracking_cost(std::span<const float> sigma_per_value, float voxel_length,
+                                  float segment_cost) const {
+  const double edge = double(voxels_per_cell_) * voxel_length;
+  const double per_segment = segment_cost / (2.0 / 3.0 * edge);
+  double cost = 0.0;
+  for (size_t i = 0; i < empty_radius_.size(); ++i) {
+    if (empty_radius_[i] != 0) continue;
+    double sigma_maj = 0.0;
+    for (int k = 0; k < channels_; ++k) sigma_maj += double(sigma_per_value[k]) * bounds_[i * stride() + k];
+    cost += per_segment + sigma_maj;
+  }
+  return cost * edge * edge * edge;
+}
+
 Bounds3 MajorantGrid::index_bounds() const {
   if (res_[0] == 0) return {};
   return {origin_, origin_ + Vec3(float(res_[0]), float(res_[1]), float(res_[2])) * float(voxels_per_cell_)};

@@ -59,6 +59,12 @@ class MajorantGrid {
   float cell_max(Coord cell, int channel) const { return bounds_[cell_index(cell) * stride() + channel]; }
   float cell_min(Coord cell, int channel) const { return bounds_[cell_index(cell) * stride() + channels_ + channel]; }
   size_t memory_bytes() const { return bounds_.size() * sizeof(float) + empty_radius_.size(); }
+  // The work of tracking through these cells, relative (compare cell sizes over the same
+  // channels), for sigma_t = sum_k sigma_per_value[k] * value_k in 1/m and voxels of
+  // voxel_length m: per non-empty cell, its volume times the work per metre of a ray in
+  // it, segment_cost / (mean chord: 2/3 of the edge, Cauchy) + sigma_maj, in collisions.
+  // Empty cells cost nothing (the iterator merges or jumps them).
+  double tracking_cost(std::span<const float> sigma_per_value, float voxel_length, float segment_cost) const;
 
  private:
   friend class MajorantIterator;

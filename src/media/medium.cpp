@@ -24,9 +24,9 @@ Medium::Medium(MediumDesc desc) : desc_(std::move(desc)) {
   if (desc_.pigments.size() > size_t(kMaxPigments))
     throw InputError(where, "pigments", fmt::format("{} pigments", desc_.pigments.size()),
                      fmt::format("a medium holds at most {}", kMaxPigments));
-  if (desc_.majorant_voxels_per_cell < 1)
+  if (desc_.majorant_voxels_per_cell < 0)
     throw InputError(where, "majorant_voxels_per_cell", fmt::format("{}", desc_.majorant_voxels_per_cell),
-                     "must be >= 1");
+                     "must be >= 1, or 0 to choose from the medium's optical thickness");
   if (const auto* hg = std::get_if<HenyeyGreenstein>(&desc_.particle_phase); hg && !(std::fabs(hg->g) < 1.f))
     throw InputError(where, "particles.g", fmt::format("{}", hg->g), "must be in (-1, 1)");
 
@@ -64,7 +64,27 @@ Medium::Medium(MediumDesc desc) : desc_(std::move(desc)) {
     grids.push_back(c.grid);
   }
   if (channels_.size() == 1 && channels_[0].same_space) single_grid_ = channels_[0].grid;
-  majorants_ = MajorantGrid(grids, desc_.majorant_voxels_per_cell);
+  if (desc_.majorant_voxels_per_cell > 0) {
+    majorants_ = MajorantGrid(grids, desc_.majorant_voxels_per_cell);
+    return;
+  }
+  // sigma_t per unit of each grid's value, averaged over wavelengths the renderer draws.
+  const PreparedMedium pm = prepare(*this, SampledWavelengths::sample_visible(0.5f, kMaxWavelengths));
+  std::array<float, kMaxMajorantChannels> sigma_per_value{};
+  for (int c = 0; c < channels(); ++c) sigma_per_value[c] = pm.channel_sigma_t[c].average(kMaxWavelengths);
+  const float voxel_length = std::cbrt(length(world_from_index_.vector({1.f, 0.f, 0.f})) *
+                                       length(world_from_index_.vector({0.f, 1.f, 0.f})) *
+                                       length(world_from_index_.vector({0.f, 0.f, 1.f})));
+  double least = 0.0;
+  for (const int size : kMajorantCellSizes) {
+    MajorantGrid candidate(grids, size);
+    const double cost = candidate.tracking_cost(std::span(sigma_per_value).first(channels()), voxel_length,
+                                                kSegmentCostInCollisions);
+    if (majorants_.channels() == 0 || cost < least) {
+      majorants_ = std::move(candidate);
+      least = cost;
+    }
+  }
 }
 
 std::optional<Medium::GridRegion> Medium::grid_region() const {

@@ -33,8 +33,12 @@
 
 namespace chlorovdb {
 
-// Majorant cell edge in voxels; docs/performance-grids.md has the measurement that chose it.
-inline constexpr int kDefaultMajorantVoxelsPerCell = 8;
+// Majorant cell edges, in voxels, a medium chooses from (MediumDesc::majorant_voxels_per_cell
+// = 0): the one with the least tracking work for the medium's optical thickness, since
+// finer cells bound sigma_t more tightly (fewer null collisions) but cost more segments.
+inline constexpr std::array<int, 5> kMajorantCellSizes{4, 6, 8, 12, 16};
+// The work of one majorant segment, in collisions (docs/performance.md, session 5).
+inline constexpr float kSegmentCostInCollisions = 0.8f;
 
 // A scalar field: a grid, or a constant everywhere.
 struct Field {
@@ -58,7 +62,7 @@ struct MediumDesc {
   Field particle_sigma_s;                 // 1/m, the same at every wavelength; constant 0: no particles
   PhaseFunction particle_phase = HenyeyGreenstein{0.f};
   Interpolation interpolation = Interpolation::trilinear;
-  int majorant_voxels_per_cell = kDefaultMajorantVoxelsPerCell;
+  int majorant_voxels_per_cell = 0;  // 0: chosen from kMajorantCellSizes for this medium
 };
 
 // Coefficients at one point, for the wavelengths of a PreparedMedium.

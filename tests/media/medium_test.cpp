@@ -1,5 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
+
 #include "core/error.h"
 #include "core/rng.h"
 #include "media/medium.h"
@@ -126,4 +129,57 @@ TEST(Medium, InvalidDescriptionsAreRefused) {
   d.particle_phase = HenyeyGreenstein{0.5f};
   d.solvent = Solvent::water(Spectrum::constant(0.1f), Spectrum{});  // index of refraction missing
   EXPECT_THROW(Medium{d}, InputError);
+}
+
+namespace {
+
+// A Gaussian blob of 32^3 voxels of 1 cm with scattering particles: sigma_s = scale * value.
+Medium blob_medium(float scale, int voxels_per_cell = 0) {
+  DenseGrid g({32, 32, 32});
+  for (int z = 0; z < 32; ++z)
+    for (int y = 0; y < 32; ++y)
+      for (int x = 0; x < 32; ++x) {
+        const float r2 = float((x - 16) * (x - 16) + (y - 16) * (y - 16) + (z - 16) * (z - 16));
+        g.at(x, y, z) = std::exp(-r2 / (2.f * 5.f * 5.f));
+      }
+  g.world_from_index = Transform::scale({0.01f, 0.01f, 0.01f});
+  MediumDesc d;
+  d.particle_sigma_s = Field::from_grid(std::make_shared<const VoxelGrid>(VoxelGrid::from_dense(g)), scale);
+  d.majorant_voxels_per_cell = voxels_per_cell;
+  return Medium(d);
+}
+
+}  // namespace
+
+// Thicker media get finer majorant cells: tighter bounds pay for their extra
+// segments once collisions dominate (docs/performance.md, session 5).
+TEST(Medium, MajorantCellsShrinkAsTheMediumThickens) {
+  int previous = 1 << 30;
+  for (const float scale : {1.f, 100.f, 1e4f, 1e6f}) {
+    const int size = blob_medium(scale).majorant_grid().voxels_per_cell();
+    EXPECT_NE(std::find(kMajorantCellSizes.begin(), kMajorantCellSizes.end(), size), kMajorantCellSizes.end());
+    EXPECT_LE(size, previous) << "scale " << scale;
+    previous = size;
+  }
+  // Thin: collisions are rare, segments dominate. Thick: the other way round.
+  EXPECT_GE(blob_medium(1.f).majorant_grid().voxels_per_cell(), 12);
+  EXPECT_EQ(blob_medium(1e6f).majorant_grid().voxels_per_cell(), kMajorantCellSizes.front());
+  EXPECT_EQ(blob_medium(1e6f, 7).majorant_grid().voxels_per_cell(), 7);  // an explicit size is kept
+  EXPECT_THROW(blob_medium(1.f, -1), InputError);
+}
+
+// tracking_cost on a uniform field: every non-empty cell costs its volume times
+// (segment cost / mean chord + sigma_maj), the chord being 2/3 of the cell edge.
+TEST(Medium, TrackingCostOfAUniformGrid) {
+  DenseGrid g({8, 8, 8}, 0.5f);
+  const VoxelGrid grid = VoxelGrid::from_dense(g);
+  const VoxelGrid* grids[] = {&grid};
+  const MajorantGrid m(grids, 4);
+  int non_empty = 0;
+  for (int z = 0; z < m.resolution()[2]; ++z)
+    for (int y = 0; y < m.resolution()[1]; ++y)
+      for (int x = 0; x < m.resolution()[0]; ++x) non_empty += m.cell_max({x, y, z}, 0) > 0.f;
+  const float sigma_per_value[] = {30.f};
+  const double edge = 4 * 0.01, expected = non_empty * edge * edge * edge * (0.8 / (2.0 / 3.0 * edge) + 30.0 * 0.5);
+  EXPECT_NEAR(m.tracking_cost(sigma_per_value, 0.01f, 0.8f), expected, 1e-6 * expected);  // 0.01f is not 0.01
 }
