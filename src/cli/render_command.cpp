@@ -325,6 +325,12 @@ int render(const RenderArgs& a) {
   image.metadata.set("scene", std::filesystem::absolute(a.scene).string());
   image.metadata.set("wavelengths_per_path", s.wavelengths);
   image.metadata.set("fluorescence", to_string(s.fluorescence));
+  {  // the majorant cell edge each grid medium chose (media/medium.cpp), for benchmarks
+    std::string cells;
+    for (const Medium& m : scene.media)
+      if (!m.homogeneous()) cells += fmt::format("{}{}", cells.empty() ? "" : " ", m.majorant_grid().voxels_per_cell());
+    if (!cells.empty()) image.metadata.set("majorant_cell_voxels", cells);
+  }
   image.metadata.set("interrupted", interrupted ? 1 : 0);
   image.metadata.set("nonfinite_samples", double(nonfinite));  // including sessions before a resume
   if (resumed_at > 0) image.metadata.set("resumed_at_spp", resumed_at);

@@ -2,12 +2,14 @@
 // killed with SIGKILL resumes from its checkpoint to the same image as an
 // uninterrupted run; Ctrl-C writes the image and a checkpoint; crops and sample
 // ranges merge into the single-run image; bad combinations are refused.
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 
 #include "checkpoint/checkpoint.h"
 #include "child_process.h"
 #include "io/image.h"
+#include "media/medium.h"
 
 namespace chlorovdb::test {
 namespace {
@@ -150,6 +152,20 @@ TEST(RenderCli, InterruptWritesTheImageAndACheckpointThatResumes) {
   const auto ref = run(render_args(dir / "ref.exr", {"--spp", "400"}), dir / "ref.log");
   ASSERT_EQ(ref.status, 0) << ref.output;
   expect_same_pixels(read_exr(dir / "int.exr"), read_exr(dir / "ref.exr"));
+}
+
+// The metadata names the majorant cell size each grid medium chose: benchmarks compare it.
+TEST(RenderCli, MetadataNamesTheMajorantCellSize) {
+  const TestDir dir;
+  const std::string scene = (std::filesystem::path(CHLOROVDB_SOURCE_DIR) / "scenes/leaf_D65.json").string();
+  const auto r = run({kExe, "render", scene, "-o", (dir / "leaf.exr").string(), "--resolution", "8x8", "--spp", "1", "-q"},
+                     dir / "leaf.log");
+  ASSERT_EQ(r.status, 0) << r.output;
+  const MetadataValue* v = read_exr(dir / "leaf.exr").metadata.find("majorant_cell_voxels");
+  ASSERT_NE(v, nullptr);
+  ASSERT_TRUE(std::holds_alternative<std::string>(*v));
+  const int size = std::stoi(std::get<std::string>(*v));
+  EXPECT_NE(std::find(kMajorantCellSizes.begin(), kMajorantCellSizes.end(), size), kMajorantCellSizes.end());
 }
 
 TEST(MergeCli, TwoSampleRangesAndTwoCropsMergeToTheSingleRun) {
