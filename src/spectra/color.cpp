@@ -17,6 +17,9 @@ namespace {
 struct CieCmfs {
   Spectrum x, y, z;
   double y_integral;
+  // The three tables side by side (one CSV, one wavelength grid): the film weighs
+  // every lane of every sample with them, and three Spectrum calls cost 3x one lookup.
+  std::vector<std::array<float, 3>> xyz;
 };
 
 // Loaded on first use (thread-safe static); a failed load throws and is retried next call.
@@ -28,6 +31,10 @@ const CieCmfs& cmfs() {
     const auto& y = std::get<Spectrum::Tabulated>(r.y.representation());
     for (size_t i = 0; i + 1 < y.lambda.size(); ++i)
       r.y_integral += 0.5 * (double(y.value[i]) + y.value[i + 1]) * (double(y.lambda[i + 1]) - y.lambda[i]);
+    const auto& x = std::get<Spectrum::Tabulated>(r.x.representation());
+    const auto& z = std::get<Spectrum::Tabulated>(r.z.representation());
+    for (size_t i = 0; i < y.lambda.size(); ++i)
+      r.xyz.push_back({x.value[i], y.value[i], z.value[i]});
     return r;
   }();
   return c;
@@ -109,7 +116,14 @@ RGB apply(const Mat3& m, const XYZ& c) {
 
 XYZ cie_cmf(float lambda_nm) {
   const CieCmfs& c = cmfs();
-  return {c.x(lambda_nm), c.y(lambda_nm), c.z(lambda_nm)};
+  // What c.x(lambda_nm), c.y(...), c.z(...) return, bit for bit, with one table lookup.
+  const auto& t = std::get<Spectrum::Tabulated>(c.y.representation());
+  if (!(lambda_nm >= t.lambda.front() && lambda_nm <= t.lambda.back())) return {0.0, 0.0, 0.0};
+  const size_t i = t.segment(lambda_nm);
+  const float f = (lambda_nm - t.lambda[i]) / (t.lambda[i + 1] - t.lambda[i]);
+  const std::array<float, 3>&a = c.xyz[i], &b = c.xyz[i + 1];
+  return {((1.f - f) * a[0] + f * b[0]) * c.x.scale(), ((1.f - f) * a[1] + f * b[1]) * c.y.scale(),
+          ((1.f - f) * a[2] + f * b[2]) * c.z.scale()};
 }
 
 double cie_y_integral() { return cmfs().y_integral; }

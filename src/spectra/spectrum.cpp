@@ -26,28 +26,13 @@ double planck(double lambda_nm, double temperature_K) {
   return c1 / (std::pow(lambda_m, 5) * std::expm1(c2 / (lambda_m * temperature_K)));
 }
 
-// Index i of the segment [lambda[i], lambda[i+1]] holding lambda_nm, which must
-// lie inside the table. Evenly spaced tables guess the index directly; the guess
-// is then corrected, so float rounding never picks the wrong segment.
-size_t segment_index(const Spectrum::Tabulated& t, float lambda_nm) {
-  const size_t last = t.lambda.size() - 2;
-  if (t.inv_step > 0.f) {
-    size_t i = std::min(size_t((lambda_nm - t.lambda[0]) * t.inv_step), last);
-    while (i > 0 && lambda_nm < t.lambda[i]) --i;
-    while (i < last && lambda_nm >= t.lambda[i + 1]) ++i;
-    return i;
-  }
-  const auto it = std::upper_bound(t.lambda.begin(), t.lambda.end(), lambda_nm);
-  return std::min(size_t(it - t.lambda.begin()) - 1, last);
-}
-
 // Unscaled evaluation of each representation.
 float evaluate(const Spectrum::Constant& c, float) { return c.value; }
 
 float evaluate(const Spectrum::Tabulated& t, float lambda_nm) {
   // The negated test also sends NaN to zero.
   if (!(lambda_nm >= t.lambda.front() && lambda_nm <= t.lambda.back())) return 0.f;
-  const size_t i = segment_index(t, lambda_nm);
+  const size_t i = t.segment(lambda_nm);
   const float x = (lambda_nm - t.lambda[i]) / (t.lambda[i + 1] - t.lambda[i]);
   // (1-x)a + xb returns the table value exactly at both ends of the segment.
   return (1.f - x) * t.value[i] + x * t.value[i + 1];
@@ -96,6 +81,21 @@ double integrate(const Spectrum::Gaussian& g, double a, double b) {
 double integrate(const Spectrum::Constant& c, double a, double b) { return double(c.value) * (b - a); }
 
 }  // namespace
+
+// Evenly spaced tables guess the index directly; the guess is then corrected,
+// so float rounding never picks the wrong segment.
+size_t Spectrum::Tabulated::segment(float lambda_nm) const {
+  const size_t last = lambda.size() - 2;
+  if (inv_step > 0.f) {
+    size_t i = std::min(size_t((lambda_nm - lambda[0]) * inv_step), last);
+    while (i > 0 && lambda_nm < lambda[i]) --i;
+    while (i < last && lambda_nm >= lambda[i + 1]) ++i;
+    return i;
+  }
+  const auto it = std::upper_bound(lambda.begin(), lambda.end(), lambda_nm);
+  return std::min(size_t(it - lambda.begin()) - 1, last);
+}
+
 
 Spectrum Spectrum::constant(float value) {
   Spectrum s;

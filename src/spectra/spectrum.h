@@ -24,6 +24,8 @@ class Spectrum {
     std::vector<float> lambda;  // strictly increasing, nm
     std::vector<float> value;
     float inv_step = 0.f;  // 1/nm when the samples are evenly spaced (O(1) lookup), else 0
+    // Index i of the segment [lambda[i], lambda[i+1]] holding lambda_nm, which must lie inside the table.
+    size_t segment(float lambda_nm) const;
   };
   struct Blackbody {
     float temperature_K;

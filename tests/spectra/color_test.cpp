@@ -4,6 +4,7 @@
 
 #include "core/rng.h"
 #include "spectra/color.h"
+#include "spectra/csv.h"
 #include "spectra/library.h"
 
 using namespace chlorovdb;
@@ -130,4 +131,20 @@ TEST(Color, SrgbTransferCurve) {
   EXPECT_NEAR(srgb_encode(0.0031308f), 0.04045f, 1e-6f);
   EXPECT_NEAR(srgb_encode(0.18f), 0.46135f, 1e-4f);
   EXPECT_NEAR(srgb_encode(0.5f), 0.735357f, 1e-5f);
+}
+
+// cie_cmf reads one interleaved table; it must return what the three tabulated
+// spectra of the CSV return, bit for bit, inside, at and outside the table's ends.
+TEST(Color, CmfTableMatchesTheTabulatedSpectra) {
+  const auto path = spectra_dir() / "cie1931_2deg_xyz.csv";
+  const Spectrum x = load_spectrum_csv(path, "x"), y = load_spectrum_csv(path, "y"), z = load_spectrum_csv(path, "z");
+  for (float l = 350.f; l <= 840.f; l += 0.37f) {
+    const XYZ c = cie_cmf(l);
+    ASSERT_EQ(c.x, double(x(l))) << l;
+    ASSERT_EQ(c.y, double(y(l))) << l;
+    ASSERT_EQ(c.z, double(z(l))) << l;
+  }
+  for (const float l : {360.f, 555.f, 830.f, std::nextafter(830.f, 900.f), std::nanf("")}) {
+    EXPECT_EQ(cie_cmf(l).y, double(y(l))) << l;
+  }
 }
