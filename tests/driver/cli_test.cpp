@@ -161,7 +161,8 @@ TEST(RenderCli, MetadataNamesTheMajorantCellSize) {
   const auto r = run({kExe, "render", scene, "-o", (dir / "leaf.exr").string(), "--resolution", "8x8", "--spp", "1", "-q"},
                      dir / "leaf.log");
   ASSERT_EQ(r.status, 0) << r.output;
-  const MetadataValue* v = read_exr(dir / "leaf.exr").metadata.find("majorant_cell_voxels");
+  const Image img = read_exr(dir / "leaf.exr");
+  const MetadataValue* v = img.metadata.find("majorant_cell_voxels");
   ASSERT_NE(v, nullptr);
   ASSERT_TRUE(std::holds_alternative<std::string>(*v));
   const int size = std::stoi(std::get<std::string>(*v));
