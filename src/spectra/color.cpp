@@ -117,11 +117,10 @@ RGB apply(const Mat3& m, const XYZ& c) {
 XYZ cie_cmf(float lambda_nm) {
   const CieCmfs& c = cmfs();
   // What c.x(lambda_nm), c.y(...), c.z(...) return, bit for bit, with one table lookup.
-  const auto& t = std::get<Spectrum::Tabulated>(c.y.representation());
-  if (!(lambda_nm >= t.lambda.front() && lambda_nm <= t.lambda.back())) return {0.0, 0.0, 0.0};
-  const size_t i = t.segment(lambda_nm);
-  const float f = (lambda_nm - t.lambda[i]) / (t.lambda[i + 1] - t.lambda[i]);
-  const std::array<float, 3>&a = c.xyz[i], &b = c.xyz[i + 1];
+  const auto at = std::get<Spectrum::Tabulated>(c.y.representation()).locate(lambda_nm);
+  if (!at) return {0.0, 0.0, 0.0};
+  const float f = at->x;
+  const std::array<float, 3>&a = c.xyz[at->i], &b = c.xyz[at->i + 1];
   return {((1.f - f) * a[0] + f * b[0]) * c.x.scale(), ((1.f - f) * a[1] + f * b[1]) * c.y.scale(),
           ((1.f - f) * a[2] + f * b[2]) * c.z.scale()};
 }

@@ -30,12 +30,10 @@ double planck(double lambda_nm, double temperature_K) {
 float evaluate(const Spectrum::Constant& c, float) { return c.value; }
 
 float evaluate(const Spectrum::Tabulated& t, float lambda_nm) {
-  // The negated test also sends NaN to zero.
-  if (!(lambda_nm >= t.lambda.front() && lambda_nm <= t.lambda.back())) return 0.f;
-  const size_t i = t.segment(lambda_nm);
-  const float x = (lambda_nm - t.lambda[i]) / (t.lambda[i + 1] - t.lambda[i]);
+  const auto at = t.locate(lambda_nm);
+  if (!at) return 0.f;
   // (1-x)a + xb returns the table value exactly at both ends of the segment.
-  return (1.f - x) * t.value[i] + x * t.value[i + 1];
+  return (1.f - at->x) * t.value[at->i] + at->x * t.value[at->i + 1];
 }
 
 float evaluate(const Spectrum::Blackbody& b, float lambda_nm) {
@@ -84,18 +82,20 @@ double integrate(const Spectrum::Constant& c, double a, double b) { return doubl
 
 // Evenly spaced tables guess the index directly; the guess is then corrected,
 // so float rounding never picks the wrong segment.
-size_t Spectrum::Tabulated::segment(float lambda_nm) const {
+std::optional<Spectrum::Tabulated::Position> Spectrum::Tabulated::locate(float lambda_nm) const {
+  // The negated test also sends NaN to nothing.
+  if (!(lambda_nm >= lambda.front() && lambda_nm <= lambda.back())) return std::nullopt;
   const size_t last = lambda.size() - 2;
+  size_t i;
   if (inv_step > 0.f) {
-    size_t i = std::min(size_t((lambda_nm - lambda[0]) * inv_step), last);
+    i = std::min(size_t((lambda_nm - lambda[0]) * inv_step), last);
     while (i > 0 && lambda_nm < lambda[i]) --i;
     while (i < last && lambda_nm >= lambda[i + 1]) ++i;
-    return i;
+  } else {
+    i = std::min(size_t(std::upper_bound(lambda.begin(), lambda.end(), lambda_nm) - lambda.begin()) - 1, last);
   }
-  const auto it = std::upper_bound(lambda.begin(), lambda.end(), lambda_nm);
-  return std::min(size_t(it - lambda.begin()) - 1, last);
+  return Position{i, (lambda_nm - lambda[i]) / (lambda[i + 1] - lambda[i])};
 }
-
 
 Spectrum Spectrum::constant(float value) {
   Spectrum s;

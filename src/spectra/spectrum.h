@@ -4,6 +4,7 @@
 // are never extrapolated), blackbody (Planck, normalised to peak 1), Gaussian.
 // Every spectrum carries a scale and a human-readable provenance string.
 #include <memory>
+#include <optional>
 #include <string>
 #include <variant>
 #include <vector>
@@ -24,8 +25,13 @@ class Spectrum {
     std::vector<float> lambda;  // strictly increasing, nm
     std::vector<float> value;
     float inv_step = 0.f;  // 1/nm when the samples are evenly spaced (O(1) lookup), else 0
-    // Index i of the segment [lambda[i], lambda[i+1]] holding lambda_nm, which must lie inside the table.
-    size_t segment(float lambda_nm) const;
+    // Where lambda_nm lies: in segment [lambda[i], lambda[i+1]] at fraction x, so that
+    // the spectrum there is (1 - x) value[i] + x value[i+1]. Nothing outside the table (or NaN).
+    struct Position {
+      size_t i;
+      float x;
+    };
+    std::optional<Position> locate(float lambda_nm) const;
   };
   struct Blackbody {
     float temperature_K;
