@@ -80,6 +80,7 @@ Medium::Medium(MediumDesc desc) : desc_(std::move(desc)) {
     MajorantGrid candidate(grids, size);
     const double cost = candidate.tracking_cost(std::span(sigma_per_value).first(channels()), voxel_length,
                                                 kSegmentCostInCollisions);
+    // The first candidate is taken whatever its cost: with extreme coefficients every cost is inf.
     if (majorants_.channels() == 0 || cost < least) {
       majorants_ = std::move(candidate);
       least = cost;

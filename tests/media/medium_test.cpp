@@ -166,6 +166,8 @@ TEST(Medium, MajorantCellsShrinkAsTheMediumThickens) {
   EXPECT_EQ(blob_medium(1e6f).majorant_grid().voxels_per_cell(), kMajorantCellSizes.front());
   EXPECT_EQ(blob_medium(1e6f, 7).majorant_grid().voxels_per_cell(), 7);  // an explicit size is kept
   EXPECT_THROW(blob_medium(1.f, -1), InputError);
+  // So thick that every candidate's modelled cost overflows to inf: a grid is still chosen.
+  EXPECT_EQ(blob_medium(3e38f).majorant_grid().channels(), 1);
 }
 
 // tracking_cost on a uniform field: every non-empty cell costs its volume times
