@@ -205,43 +205,61 @@ float VoxelGrid::voxel(int x, int y, int z) const {
   return *brick_values(ix, iy, iz);
 }
 
-std::pair<float, float> VoxelGrid::min_max(Coord lo, Coord hi) const {
-  float mn = std::numeric_limits<float>::max(), mx = std::numeric_limits<float>::lowest();
+template <typename F>
+void VoxelGrid::for_each_value(Coord lo, Coord hi, F&& f) const {
+  int64_t total = 1;
+  for (int a = 0; a < 3; ++a) total *= std::max<int64_t>(0, int64_t(hi[a]) - lo[a] + 1);
+  if (total == 0) {  // an empty box: the background, as for a box outside the voxels
+    f(background_, int64_t(0));
+    return;
+  }
   // Clip to the stored voxels; any part of the box outside them is background.
   Coord clo, chi;
-  bool outside = false, any_inside = true;
+  int64_t inside = 1;
   for (int a = 0; a < 3; ++a) {
     const int slo = brick_base_[a], shi = brick_base_[a] + 8 * bricks_[a] - 1;
-    if (lo[a] < slo || hi[a] > shi) outside = true;
     clo[a] = std::max(lo[a], slo);
     chi[a] = std::min(hi[a], shi);
-    if (clo[a] > chi[a]) any_inside = false;
+    inside *= std::max<int64_t>(0, int64_t(chi[a]) - clo[a] + 1);
   }
-  if (outside || !any_inside) mn = mx = background_;
-  if (!any_inside) return {mn, mx};
+  if (inside < total) f(background_, total - inside);
+  if (inside == 0) return;
   for (int bz = (clo[2] - brick_base_[2]) >> 3; bz <= (chi[2] - brick_base_[2]) >> 3; ++bz)
     for (int by = (clo[1] - brick_base_[1]) >> 3; by <= (chi[1] - brick_base_[1]) >> 3; ++by)
       for (int bx = (clo[0] - brick_base_[0]) >> 3; bx <= (chi[0] - brick_base_[0]) >> 3; ++bx) {
         const uint32_t slot = table_[bx + bricks_[0] * (by + bricks_[1] * bz)];
-        if (slot == 0) {  // a background brick: no need to read its voxels
-          mn = std::min(mn, background_);
-          mx = std::max(mx, background_);
-          continue;
-        }
-        const float* v = pool_.data() + size_t(slot) * kBrickValues;
         const Coord o{brick_base_[0] + 8 * bx, brick_base_[1] + 8 * by, brick_base_[2] + 8 * bz};
         const Coord a{std::max(clo[0], o[0]) - o[0], std::max(clo[1], o[1]) - o[1], std::max(clo[2], o[2]) - o[2]};
         const Coord b{std::min(chi[0], o[0] + 7) - o[0], std::min(chi[1], o[1] + 7) - o[1],
                       std::min(chi[2], o[2] + 7) - o[2]};
+        if (slot == 0) {  // a background brick: no need to read its voxels
+          f(background_, int64_t(b[0] - a[0] + 1) * (b[1] - a[1] + 1) * (b[2] - a[2] + 1));
+          continue;
+        }
+        const float* v = pool_.data() + size_t(slot) * kBrickValues;
         for (int z = a[2]; z <= b[2]; ++z)
           for (int y = a[1]; y <= b[1]; ++y)
-            for (int x = a[0]; x <= b[0]; ++x) {
-              const float value = v[x + kBrickStride * (y + kBrickStride * z)];
-              mn = std::min(mn, value);
-              mx = std::max(mx, value);
-            }
+            for (int x = a[0]; x <= b[0]; ++x) f(v[x + kBrickStride * (y + kBrickStride * z)], int64_t(1));
       }
+}
+
+std::pair<float, float> VoxelGrid::min_max(Coord lo, Coord hi) const {
+  float mn = std::numeric_limits<float>::max(), mx = std::numeric_limits<float>::lowest();
+  for_each_value(lo, hi, [&](float value, int64_t) {
+    mn = std::min(mn, value);
+    mx = std::max(mx, value);
+  });
   return {mn, mx};
+}
+
+float VoxelGrid::mean(Coord lo, Coord hi) const {
+  double sum = 0.0;
+  int64_t count = 0;
+  for_each_value(lo, hi, [&](float value, int64_t n) {
+    sum += double(value) * double(n);
+    count += n;
+  });
+  return count > 0 ? float(sum / double(count)) : background_;
 }
 
 Bounds3 VoxelGrid::index_bounds() const {

@@ -94,6 +94,8 @@ class VoxelGrid {
   float voxel(int x, int y, int z) const;
   // Min and max of the voxel values in the inclusive index box [lo, hi].
   std::pair<float, float> min_max(Coord lo, Coord hi) const;
+  // Their mean (the background counts for voxels outside the stored ones).
+  float mean(Coord lo, Coord hi) const;
 
   const Transform& world_from_index() const { return world_from_index_; }
   // Places the same voxels elsewhere in the world (a scene's length unit).
@@ -118,6 +120,10 @@ class VoxelGrid {
 
  private:
   // The stored value of voxel brick_base_ + i; i must lie in [0, 8 * bricks_).
+  // f(value, count) for the voxels of [lo, hi]: stored ones one by one, each whole
+  // background brick and the part of the box outside the stored voxels in one call.
+  template <typename F>
+  void for_each_value(Coord lo, Coord hi, F&& f) const;
   const float* brick_values(int ix, int iy, int iz) const {
     const int b = (ix >> 3) + bricks_[0] * ((iy >> 3) + bricks_[1] * (iz >> 3));
     return pool_.data() + size_t(table_[b]) * kBrickValues + (ix & 7) + kBrickStride * ((iy & 7) + kBrickStride * (iz & 7));

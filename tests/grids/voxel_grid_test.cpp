@@ -103,7 +103,7 @@ TEST(VoxelGrid, BackgroundBricksAreShared) {
   EXPECT_LT(g.memory_bytes(), size_t(64 * 64 * 64 * 4) / 20);
 }
 
-TEST(VoxelGrid, MinMaxOverBoxes) {
+TEST(VoxelGrid, MinMaxAndMeanOverBoxes) {
   const DenseGrid d = random_grid({20, 20, 20}, {-3, -3, -3}, 6);
   const VoxelGrid g = VoxelGrid::from_dense(d);
   Rng rng(7, 0);
@@ -114,15 +114,19 @@ TEST(VoxelGrid, MinMaxOverBoxes) {
       hi[a] = lo[a] + int(rng.uniform() * 10.f);
     }
     float mn = 1e30f, mx = -1e30f;
+    double sum = 0.0;
     for (int z = lo[2]; z <= hi[2]; ++z)
       for (int y = lo[1]; y <= hi[1]; ++y)
         for (int x = lo[0]; x <= hi[0]; ++x) {
           mn = std::min(mn, reference_voxel(d, x, y, z));
           mx = std::max(mx, reference_voxel(d, x, y, z));
+          sum += reference_voxel(d, x, y, z);
         }
     const auto [gmn, gmx] = g.min_max(lo, hi);
     ASSERT_EQ(gmn, mn);
     ASSERT_EQ(gmx, mx);
+    const double count = double(hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1);
+    ASSERT_NEAR(g.mean(lo, hi), sum / count, 1e-6 * std::max(1.0, std::abs(sum / count)));
   }
 }
 
