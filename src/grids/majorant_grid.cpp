@@ -45,7 +45,7 @@ MajorantGrid::MajorantGrid(std::span<const VoxelGrid* const> channels, int voxel
   for (size_t k = 0; k < channels.size(); ++k) {
     channel_from_majorant[k] = channels[k]->index_from_world() * channels[0]->world_from_index();
     same_space[k] = channel_from_majorant[k].is_identity();
-    background_[k] = background_[channels_ + k] = channels[k]->background();
+    background_[k] = background_[channels_ + k] = background_[2 * channels_ + k] = channels[k]->background();
     if (background_[k] != 0.f) background_empty_ = false;
   }
 
@@ -83,6 +83,14 @@ MajorantGrid::MajorantGrid(std::span<const VoxelGrid* const> channels, int voxel
       const auto [mn, mx] = channels[k]->min_max(vlo, vhi);
       bounds_[i * stride() + k] = mx;
       bounds_[i * stride() + channels_ + k] = mn;
+      // The voxels whose centres lie in the cell (its faces are on voxel faces).
+      const Bounds3 own = same_space[k] ? cell : map_box(cell, channel_from_majorant[k]);
+      Coord olo, ohi;
+      for (int a = 0; a < 3; ++a) {
+        olo[a] = int(std::ceil(own.lo[a]));
+        ohi[a] = std::max(olo[a], int(std::floor(own.hi[a])));
+      }
+      bounds_[i * stride() + 2 * channels_ + k] = channels[k]->mean(olo, ohi);
       if (mx != 0.f) empty = false;
     }
     empty_radius_[i] = empty ? 255 : 0;

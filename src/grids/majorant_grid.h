@@ -31,10 +31,12 @@ inline constexpr int kMaxMajorantChannels = 5;
 struct MajorantSegment {
   float t_min = 0.f, t_max = 0.f;  // in the parameter of the ray given to segments()
   // Per channel k: no lookup in (t_min, t_max) returns more than c_max[k] or less
-  // than c_min[k]. Both point into the grid (valid while it lives): a segment is
-  // made for every cell a ray crosses, so it copies nothing.
+  // than c_min[k]; c_mean[k] is the mean of the cell's own voxels, a prediction (not
+  // a bound) of what the ray meets there. All point into the grid (valid while it
+  // lives): a segment is made for every cell a ray crosses, so it copies nothing.
   const float* c_max = nullptr;
   const float* c_min = nullptr;
+  const float* c_mean = nullptr;
 };
 
 class MajorantIterator;
@@ -58,6 +60,7 @@ class MajorantGrid {
   Bounds3 index_bounds() const;
   float cell_max(Coord cell, int channel) const { return bounds_[cell_index(cell) * stride() + channel]; }
   float cell_min(Coord cell, int channel) const { return bounds_[cell_index(cell) * stride() + channels_ + channel]; }
+  float cell_mean(Coord cell, int channel) const { return bounds_[cell_index(cell) * stride() + 2 * channels_ + channel]; }
   size_t memory_bytes() const { return bounds_.size() * sizeof(float) + empty_radius_.size(); }
   // The work of tracking through these cells, relative (compare cell sizes over the same
   // channels), for sigma_t = sum_k sigma_per_value[k] * value_k in 1/m and voxels of
@@ -69,7 +72,7 @@ class MajorantGrid {
  private:
   friend class MajorantIterator;
   void compute_empty_radii();
-  int stride() const { return 2 * channels_; }
+  int stride() const { return 3 * channels_; }
   size_t cell_index(Coord c) const { return c[0] + size_t(res_[0]) * (c[1] + size_t(res_[1]) * c[2]); }
 
   int channels_ = 0;
@@ -77,12 +80,12 @@ class MajorantGrid {
   Coord res_{0, 0, 0};
   Vec3 origin_;                 // majorant index-space corner of cell (0,0,0)
   float inv_cell_size_ = 1.f;   // 1 / voxels_per_cell
-  std::vector<float> bounds_;          // per cell: c_max[channels], then c_min[channels]
+  std::vector<float> bounds_;          // per cell: c_max[channels], c_min[channels], c_mean[channels]
   // Per cell: 0 if some channel's max is non-zero; else the Chebyshev distance in
   // cells to the nearest such cell (capped at 255; 255 too if there is none).
   std::vector<uint8_t> empty_radius_;
-  // The bounds outside the cells, laid out like a cell's: c_max[channels], then c_min[channels].
-  std::array<float, 2 * kMaxMajorantChannels> background_{};
+  // The bounds outside the cells, laid out like a cell's: c_max, c_min, c_mean.
+  std::array<float, 3 * kMaxMajorantChannels> background_{};
   bool background_empty_ = true;
 };
 
@@ -128,7 +131,7 @@ class MajorantIterator {
   }
   MajorantSegment segment(const Piece& p) const {
     const float* b = p.cell < 0 ? grid_->background_.data() : grid_->bounds_.data() + size_t(p.cell) * grid_->stride();
-    return {p.t0, p.t1, b, b + grid_->channels_};
+    return {p.t0, p.t1, b, b + grid_->channels_, b + 2 * grid_->channels_};
   }
   // (Re)start the DDA in the cell holding the ray at parameter t.
   void enter_cells(float t);

@@ -1,5 +1,7 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "core/rng.h"
@@ -193,4 +195,40 @@ TEST(MajorantGrid, WithoutChannelsTheRayIsOneSegment) {
   ASSERT_EQ(segs.size(), 1u);
   EXPECT_EQ(segs[0].t_min, 0.f);
   EXPECT_EQ(segs[0].t_max, 7.f);
+}
+
+TEST(MajorantGrid, CellMeansAreTheMeansOfTheirOwnVoxels) {
+  // The mean predicts what a ray meets in a cell (the predicted roulette in
+  // transmittance.cpp): it averages the voxels whose centres lie in the cell, and so
+  // lies between the cell's bounds; segments point at it.
+  const DenseGrid d = spiky_grid({40, 33, 27}, 5);
+  const VoxelGrid g = VoxelGrid::from_dense(d);
+  const VoxelGrid* channels[] = {&g};
+  for (int voxels_per_cell : {1, 3, 8}) {
+    const MajorantGrid m(channels, voxels_per_cell);
+    const Vec3 origin = m.index_bounds().lo;  // cell faces on voxel faces: origin is a half-integer
+    const Coord res = m.resolution();
+    for (int z = 0; z < res[2]; ++z)
+      for (int y = 0; y < res[1]; ++y)
+        for (int x = 0; x < res[0]; ++x) {
+          const Coord cell{x, y, z};
+          double sum = 0.0;
+          Coord lo;
+          for (int a = 0; a < 3; ++a) lo[a] = int(std::ceil(origin[a])) + cell[a] * voxels_per_cell;
+          for (int k = 0; k < voxels_per_cell; ++k)
+            for (int j = 0; j < voxels_per_cell; ++j)
+              for (int i = 0; i < voxels_per_cell; ++i) sum += g.voxel(lo[0] + i, lo[1] + j, lo[2] + k);
+          const double mean = sum / double(voxels_per_cell * voxels_per_cell * voxels_per_cell);
+          const float c_mean = m.cell_mean(cell, 0);
+          ASSERT_NEAR(c_mean, mean, 1e-5 * std::max(1.0, mean)) << "cell size " << voxels_per_cell;
+          ASSERT_LE(m.cell_min(cell, 0), c_mean);
+          ASSERT_GE(m.cell_max(cell, 0), c_mean);
+        }
+    Rng rng(6, 0);
+    for (int i = 0; i < 200; ++i)
+      for (const MajorantSegment& s : collect(m, random_ray(g.index_bounds(), rng, false), 100.f)) {
+        ASSERT_LE(*s.c_min, *s.c_mean);
+        ASSERT_GE(*s.c_max, *s.c_mean);
+      }
+  }
 }
