@@ -13,7 +13,8 @@
 
 namespace chlorovdb::detail {
 
-// begin(const MajorantSegment&) -> float: the collision rate in this segment (<= 0: none);
+// begin(const MajorantSegment&) -> float: the collision rate in this segment (0: none;
+//   negative: stop the walk here, as a roulette that ends the ray does);
 // collide(float t) -> bool: a tentative collision at ray parameter t; false stops the walk;
 // end(const MajorantSegment&): the segment is done (not called after collide returned false).
 // u is the first uniform sample; later ones come from rng. Returns false if collide stopped the walk.
@@ -30,6 +31,7 @@ bool walk_majorants(const Medium& medium, const Ray& ray_index, float t_max, flo
   MajorantIterator it = medium.majorants(ray_index, t_max);
   while (const std::optional<MajorantSegment> seg = it.next()) {
     const float rate = begin(*seg);
+    if (rate < 0.f) return false;
     if (rate > 0.f) {
       float t = seg->t_min;
       for (;;) {

@@ -16,6 +16,11 @@ namespace {
 // instructions at tau~10 / tau~100 for 1.8 % / 2.5 % more MSE, a wash; 1.0 loses
 // 11 % / 4 % efficiency.
 constexpr float kRouletteWeight = 0.25f;
+// The predicted roulette looks only at segments predicted to take at least this optical
+// depth off every lane, ln(1 / kRouletteWeight): alone they would take an untouched
+// factor (1) below the window. Thinner ones cost no exp; the window at collisions
+// still catches what they leave.
+constexpr float kPredictedRouletteMinTau = 1.3862944f;
 
 float max_lane(const SampledSpectrum& s, int n) {
   float m = 0.f;
@@ -56,16 +61,44 @@ SampledSpectrum ratio_tracking(const Track& k, Rng& rng) {
           cut_unbounded(k.prepared.sigma_maj(s, k.channels, k.n), k.n, &T);
           return 0.f;
         }
-        float rate = 0.f;
+        const float length = s.t_max - s.t_min;
+        float rate = 0.f, tau_r_min = kInfinity;
         for (int i = 0; i < k.n; ++i) {
           const float sigma_maj = k.prepared.sigma_t_lane(s.c_max, k.channels, i);
+          const float sigma_mean = k.prepared.sigma_t_lane(s.c_mean, k.channels, i);
           if constexpr (kResidual) {
             // The control part is integrated exactly; only the residual is tracked.
             sigma_c[i] = k.prepared.sigma_t_lane(s.c_min, k.channels, i);
-            tau_c[i] += sigma_c[i] * (s.t_max - s.t_min);
+            tau_c[i] += sigma_c[i] * length;
             rate = std::max(rate, sigma_maj - sigma_c[i]);
+            tau_r_min = std::min(tau_r_min, (sigma_mean - sigma_c[i]) * length);
           } else {
             rate = std::max(rate, sigma_maj);
+            tau_r_min = std::min(tau_r_min, sigma_mean * length);
+          }
+        }
+        // The predicted roulette: the cell's mean predicts what this segment will do
+        // to the tracked factor. Where it would take every lane below the window, the
+        // roulette that would follow within a few collisions is played now, before
+        // them: continue with probability q = predicted / window, survivors carry 1/q.
+        // Unbiased for any q in (0, 1]; a wrong prediction costs variance, not
+        // accuracy. In thick media most shadow rays end here without a lookup (the
+        // cloud at tau~100: 75 % of shadow collisions came before the window).
+        // tau_r_min is the least exponent over the lanes.
+        if (tau_r_min > kPredictedRouletteMinTau) {
+          float predicted = 0.f;
+          for (int i = 0; i < k.n; ++i) {
+            const float sigma_mean = k.prepared.sigma_t_lane(s.c_mean, k.channels, i);
+            const float sigma_r = kResidual ? sigma_mean - sigma_c[i] : sigma_mean;
+            predicted = std::max(predicted, T[i] * std::exp(-sigma_r * length));
+          }
+          if (predicted < kRouletteWeight) {
+            const float q = predicted / kRouletteWeight;
+            if (!(rng.uniform() < q)) {
+              T = SampledSpectrum(0.f);
+              return -1.f;
+            }
+            T /= q;
           }
         }
         inv_rate = 1.f / rate;

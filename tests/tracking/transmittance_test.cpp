@@ -147,6 +147,41 @@ TEST(Transmittance, EstimatorNamesRoundTrip) {
             TransmittanceEstimator::residual_ratio);
 }
 
+TEST(Transmittance, ThickSegmentsAreRouletteBeforeTheirCollisions) {
+  // A grey homogeneous medium, tau = 3 over one segment: ratio tracking's majorant is
+  // exact there, so without the predicted roulette every estimate would be 0 or 1. The
+  // roulette plays first with q = e^-3 / 0.25 (transmittance.cpp), so a non-zero estimate
+  // is exactly 1/q: it survived the roulette, then met no collision. The mean stays e^-3.
+  const double tau = 3.0, length = 0.3;
+  const float eps = 25000.f;  // L/(mol cm)
+  MediumDesc d;
+  d.solvent = Solvent::none();
+  const double c = tau / length / (100.0 * std::log(10.0) * eps);
+  d.pigments.push_back({{"grey", Spectrum::constant(eps), Spectrum::constant(0.f), 0.f}, Field::constant(float(c))});
+  const Medium m(d);
+  const SampledWavelengths lambda = four_wavelengths();
+  const PreparedMedium pm = prepare(m, lambda);
+  ASSERT_TRUE(pm.grey);
+  const Ray ray{{0.1f, 0.2f, 0.3f}, Vec3{0.6f, 0.f, 0.8f} * 2.f};
+  const double inv_q = 0.25 / std::exp(-tau);
+  Rng rng(77, 0);
+  const int n = 40000;
+  int survivors = 0;
+  double sum = 0, sum2 = 0;
+  for (int i = 0; i < n; ++i) {
+    const float T = transmittance(ray, float(length / 2.0), lambda, m, pm, TransmittanceEstimator::ratio, rng)[0];
+    if (T != 0.f) {
+      ASSERT_NEAR(T, inv_q, 1e-4 * inv_q);
+      ++survivors;
+    }
+    sum += T;
+    sum2 += double(T) * T;
+  }
+  EXPECT_GT(survivors, 0);
+  const double mean = sum / n, se = std::sqrt(std::max(0.0, sum2 / n - mean * mean) / (n - 1));
+  EXPECT_NEAR(mean, std::exp(-tau), 4.0 * se);
+}
+
 TEST(Transmittance, GreyMediaTrackOneLaneForAll) {
   // The rough slab's grid, holding a grey absorber and grey particles instead of the
   // ramp pigment in water: prepare() finds it grey, every estimator then returns one
