@@ -32,7 +32,7 @@ function(chlorovdb_test name)
   endif()
   add_executable(test_${name} ${sources})
   target_link_libraries(test_${name} PRIVATE ${ARG_LIBS} GTest::gtest GTest::gtest_main)
-  target_include_directories(test_${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests)  # scratch_dir.h
+  target_include_directories(test_${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests)  # scratch_dir.h, test_seed.h
   target_compile_definitions(test_${name} PRIVATE
     CHLOROVDB_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
   gtest_discover_tests(test_${name} DISCOVERY_TIMEOUT 60

@@ -14,8 +14,10 @@
 #include "analysis/progressive.h"
 #include "lights/light.h"
 #include "scene/scene_loader.h"
+#include "test_seed.h"
 
 using namespace chlorovdb;
+using chlorovdb::test::test_seed;
 
 namespace {
 
@@ -31,7 +33,7 @@ Outcome converge(SlabCase slab, const std::string& tag) {
   const Image truth = slab_reference_image(slab, scene);
   ConvergenceOptions o;
   o.spp = {8, 32, 128, 512};
-  o.seed = 1234;
+  o.seed = test_seed(1234);
   o.keep_images = true;
   const auto points = run_convergence(scene, truth, o);
   EXPECT_EQ(points.size(), 4u);

@@ -5,13 +5,15 @@
 #include <vector>
 
 #include "core/exponential.h"
+#include "test_seed.h"
 
 using namespace chlorovdb;
+using chlorovdb::test::test_seed;
 
 namespace {
 
 std::vector<double> samples(int n, uint64_t seed) {
-  Rng rng(seed, 0);
+  Rng rng(test_seed(seed), 0);
   std::vector<double> x(n);
   for (double& v : x) v = sample_standard_exponential(rng);
   return x;

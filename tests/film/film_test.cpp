@@ -7,8 +7,10 @@
 #include "film/film.h"
 #include "spectra/color.h"
 #include "spectra/library.h"
+#include "test_seed.h"
 
 using namespace chlorovdb;
+using chlorovdb::test::test_seed;
 
 namespace {
 
@@ -27,7 +29,7 @@ TEST(Film, ConstantSpectrumGivesItsXyzAndRgb) {
   const Spectrum one = Spectrum::constant(1.f);
   const XYZ exact = spectrum_to_xyz(one);
   Film film(3, 2, {"beauty"}, ColorSpace::sRGB);
-  Rng rng(5, 0);
+  Rng rng(test_seed(5), 0);
   const int spp = 4000;
   Stats x, y, z;
   for (int k = 0; k < spp; ++k) {
@@ -68,7 +70,7 @@ TEST(Film, ConstantSpectrumGivesItsXyzAndRgb) {
 TEST(Film, D65IsNeutralInAcesCg) {
   const Spectrum d65 = named_spectrum("D65").scaled(0.01f);
   Film film(1, 1, {"beauty"}, ColorSpace::ACEScg);
-  Rng rng(9, 0);
+  Rng rng(test_seed(9), 0);
   const int spp = 20000;
   for (int k = 0; k < spp; ++k) {
     const SampledWavelengths lambda = SampledWavelengths::sample_visible(rng.uniform(), 8);
@@ -113,7 +115,7 @@ TEST(Film, SpectralBinsRecoverATabulatedSpectrum) {
   film.enable_spectral(lo, hi, bins);
   const double width = (hi - lo) / bins;
   std::vector<Stats> stats(bins);
-  Rng rng(21, 0);
+  Rng rng(test_seed(21), 0);
   for (int k = 0; k < spp; ++k) {
     const SampledWavelengths lambda = SampledWavelengths::sample_visible(rng.uniform(), count);
     const SampledSpectrum L = d65.sample(lambda);
@@ -140,7 +142,7 @@ TEST(Film, MergeAddsSums) {
   const Spectrum d65 = named_spectrum("D65");
   Film all(2, 2, {"beauty"}, ColorSpace::sRGB), first(2, 2, {"beauty"}, ColorSpace::sRGB), second(2, 2, {"beauty"}, ColorSpace::sRGB);
   for (Film* f : {&all, &first, &second}) f->enable_spectral(360, 830, 47);
-  Rng rng(2, 0);
+  Rng rng(test_seed(2), 0);
   for (int k = 0; k < 200; ++k) {
     const SampledWavelengths lambda = SampledWavelengths::sample_visible(rng.uniform(), 4);
     const SampledSpectrum L = d65.sample(lambda);

@@ -7,8 +7,10 @@
 #include "core/constants.h"
 #include "core/rng.h"
 #include "geometry/geometry_scene.h"
+#include "test_seed.h"
 
 using namespace chlorovdb;
+using chlorovdb::test::test_seed;
 
 namespace {
 
@@ -30,7 +32,7 @@ struct Counts {
 Counts probe(const GeometryScene& scene, int shape, Vec3 eye, Vec3 target, float jitter, bool convex_solid,
              float min_inner_t) {
   Counts counts;
-  Rng rng(17, 0);
+  Rng rng(test_seed(17), 0);
   for (int i = 0; i < 4000; ++i) {
     const Vec3 aim = target + jitter * Vec3(rng.uniform() - 0.5f, rng.uniform() - 0.5f, rng.uniform() - 0.5f);
     const auto hit = scene.intersect({eye, normalize(aim - eye)}, kInfinity);
@@ -107,7 +109,7 @@ TEST(SpawnRay, ShadowRayToALightSurfaceIsNotBlockedByIt) {
   scene.add_mesh(make_quad({-10, -10, 0}, {20, 0, 0}, {0, 20, 0}), Transform::translate(offset));
   const int light = scene.add_mesh(make_quad({-1, -1, 0}, {0, 2, 0}, {2, 0, 0}), Transform::translate(offset + Vec3(0, 0, 3)));
   scene.commit();
-  Rng rng(23, 0);
+  Rng rng(test_seed(23), 0);
   int blocked = 0;
   for (int i = 0; i < 2000; ++i) {
     const Vec3 aim = offset + Vec3(16 * rng.uniform() - 8, 16 * rng.uniform() - 8, 0);

@@ -8,6 +8,7 @@
 #include "integrator/render.h"
 #include "spectra/color.h"
 #include "test_scenes.h"
+#include "test_seed.h"
 
 using namespace chlorovdb;
 using namespace chlorovdb::test;
@@ -69,7 +70,7 @@ TEST(Determinism, SameImageForAnyThreadCount) {
     RenderOptions o;
     o.spp = 6;
     o.threads = threads;
-    o.seed = 42;
+    o.seed = test_seed(42);
     chlorovdb::render(scene, film, o);
     return film.raw_xyz(0);
   };

@@ -10,6 +10,7 @@
 
 #include "core/rng.h"
 #include "media/medium.h"
+#include "test_seed.h"
 
 namespace chlorovdb::test {
 
@@ -136,13 +137,13 @@ inline std::shared_ptr<Medium> grey_medium_on(const Slab& s, double* tau) {
 // kinks, and a gentle one (for thick media, where only a small residual is tracked).
 inline std::vector<double> rough_profile() {
   std::vector<double> v(64);
-  Rng rng(42, 0);
+  Rng rng(test_seed(42), 0);
   for (int i = 0; i < 64; ++i) v[i] = (i >= 24 && i < 40) ? 0.0 : 0.2 + 1.6 * rng.uniform();
   return v;
 }
 inline std::vector<double> gentle_profile() {
   std::vector<double> v(64);
-  Rng rng(43, 0);
+  Rng rng(test_seed(43), 0);
   for (int i = 0; i < 64; ++i) v[i] = 0.9 + 0.2 * rng.uniform();
   return v;
 }
