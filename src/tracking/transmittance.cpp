@@ -16,6 +16,12 @@ namespace {
 // instructions at tau~10 / tau~100 for 1.8 % / 2.5 % more MSE, a wash; 1.0 loses
 // 11 % / 4 % efficiency.
 constexpr float kRouletteWeight = 0.25f;
+// The least survival probability either roulette uses. Rng::uniform() has 24 bits, so a
+// q below about 2^-24 would not be the probability actually played (u = 0 alone passes,
+// with probability 2^-24), and its survivors' 1/q could overflow to infinity (the
+// predicted roulette's q reaches 1e-40 at tau ~ 85). Clamped, survival stays exactly q
+// to within 2^-12 and a survivor's factor grows at most 4096-fold.
+constexpr float kMinSurvival = 1.f / 4096.f;
 // The predicted roulette looks only at segments predicted to take at least this optical
 // depth off every lane, ln(1 / kRouletteWeight): alone they would take an untouched
 // factor (1) below the window. Thinner ones cost no exp; the window at collisions
@@ -93,7 +99,7 @@ SampledSpectrum ratio_tracking(const Track& k, Rng& rng) {
             predicted = std::max(predicted, T[i] * std::exp(-sigma_r * length));
           }
           if (predicted < kRouletteWeight) {
-            const float q = predicted / kRouletteWeight;
+            const float q = std::max(predicted / kRouletteWeight, kMinSurvival);
             if (!(rng.uniform() < q)) {
               T = SampledSpectrum(0.f);
               return -1.f;
@@ -120,7 +126,7 @@ SampledSpectrum ratio_tracking(const Track& k, Rng& rng) {
         // accuracy in thick but smooth media (rouletting on T * T_c instead saved
         // only 1.5 % more instructions on the cloud at tau~100).
         if (T_max < kRouletteWeight) {
-          const float q = T_max / kRouletteWeight;
+          const float q = std::max(T_max / kRouletteWeight, kMinSurvival);
           if (!(rng.uniform() < q)) {
             T = SampledSpectrum(0.f);
             return false;

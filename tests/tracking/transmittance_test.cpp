@@ -183,6 +183,34 @@ TEST(Transmittance, ThickSegmentsAreRouletteBeforeTheirCollisions) {
   EXPECT_NEAR(mean, std::exp(-tau), 4.0 * se);
 }
 
+TEST(Transmittance, ExtremeOpticalDepthsStayFinite) {
+  // Far beyond what float e^-tau resolves (its exp underflows near tau = 88, and at
+  // tau ~ 80-88 the predicted roulette's q falls below the 24-bit resolution of a
+  // uniform): every estimate must be finite, non-negative and, here, essentially 0.
+  for (double tau : {60.0, 84.0, 87.0, 120.0, 1e4}) {
+    const double length = 0.3;
+    const float eps = 25000.f;
+    MediumDesc d;
+    d.solvent = Solvent::none();
+    const double c = tau / length / (100.0 * std::log(10.0) * eps);
+    d.pigments.push_back({{"grey", Spectrum::constant(eps), Spectrum::constant(0.f), 0.f}, Field::constant(float(c))});
+    const Medium m(d);
+    const SampledWavelengths lambda = four_wavelengths();
+    const PreparedMedium pm = prepare(m, lambda);
+    const Ray ray{{0.1f, 0.2f, 0.3f}, Vec3{0.6f, 0.f, 0.8f} * 2.f};
+    Rng rng(test_seed(78), 0);
+    for (TransmittanceEstimator e : kTracking)
+      for (int i = 0; i < 20000; ++i) {
+        const SampledSpectrum T = transmittance(ray, float(length / 2.0), lambda, m, pm, e, rng);
+        for (int l = 0; l < 4; ++l) {
+          ASSERT_TRUE(std::isfinite(T[l]) && T[l] >= 0.f) << to_string(e) << " tau " << tau << ": " << T[l];
+          // A survivor of both roulettes carries at most 4096 x 0.25 x (1/q <= 4096): far below any overflow.
+          ASSERT_LE(T[l], 4096.f * 4096.f) << to_string(e) << " tau " << tau;
+        }
+      }
+  }
+}
+
 TEST(Transmittance, GreyMediaTrackOneLaneForAll) {
   // The rough slab's grid, holding a grey absorber and grey particles instead of the
   // ramp pigment in water: prepare() finds it grey, every estimator then returns one
