@@ -40,8 +40,13 @@ TEST(Diffuse, WeightEqualsAlbedoAndMatchesEvalAndPdf) {
     EXPECT_FALSE(s->is_specular);
     EXPECT_GT(dot(wo, hit.ns) * dot(s->wi, hit.ns), 0.f) << "two-sided: wi on wo's side";
     const float cos_i = std::fabs(dot(s->wi, hit.ns));
-    for (int k = 0; k < lambda.count(); ++k) EXPECT_NEAR(s->f[k] * cos_i / s->pdf, 0.7f, 1e-5f);
-    EXPECT_NEAR(s->pdf, bsdf.pdf(wo, s->wi), 1e-5f * s->pdf);
+    // The sampler's pdf comes from the local cosine, cos_i from the world direction: the
+    // frame's rounding puts up to ~1e-6 between them, which near grazing is a large
+    // relative error (a seed sweep met cos_i = 0.0018 and 3e-5 relative).
+    constexpr float kCosRounding = 1e-6f;
+    for (int k = 0; k < lambda.count(); ++k)
+      EXPECT_NEAR(s->f[k] * cos_i / s->pdf, 0.7f, 1e-5f + 0.7f * kCosRounding / cos_i);
+    EXPECT_NEAR(s->pdf, bsdf.pdf(wo, s->wi), 1e-5f * s->pdf + kCosRounding * kInvPi);
     EXPECT_NEAR(s->f[0], bsdf.f(wo, s->wi)[0], 1e-7f);
   }
 }
