@@ -69,6 +69,18 @@ void expect_unbiased(const Slab& s, TransmittanceEstimator e, int n, uint64_t se
 const TransmittanceEstimator kTracking[] = {TransmittanceEstimator::ratio, TransmittanceEstimator::residual_ratio,
                                             TransmittanceEstimator::delta};
 
+// A grey, homogeneous absorber with optical depth tau along grey_slab_ray over [0, grey_slab_t_max].
+Medium grey_homogeneous(double tau) {
+  const float eps = 25000.f;  // L/(mol cm)
+  MediumDesc d;
+  d.solvent = Solvent::none();
+  const double c = tau / 0.3 / (100.0 * std::log(10.0) * eps);
+  d.pigments.push_back({{"grey", Spectrum::constant(eps), Spectrum::constant(0.f), 0.f}, Field::constant(float(c))});
+  return Medium(d);
+}
+const Ray grey_slab_ray{{0.1f, 0.2f, 0.3f}, Vec3{0.6f, 0.f, 0.8f} * 2.f};  // 2 m per unit t
+constexpr float grey_slab_t_max = 0.15f;                                   // 0.3 m
+
 }  // namespace
 
 TEST(Transmittance, ClosedFormIsExactInHomogeneousSlabs) {
@@ -153,24 +165,18 @@ TEST(Transmittance, ThickSegmentsAreRouletteBeforeTheirCollisions) {
   // exact there, so without the predicted roulette every estimate would be 0 or 1. The
   // roulette plays first with q = e^-3 / 0.25 (transmittance.cpp), so a non-zero estimate
   // is exactly 1/q: it survived the roulette, then met no collision. The mean stays e^-3.
-  const double tau = 3.0, length = 0.3;
-  const float eps = 25000.f;  // L/(mol cm)
-  MediumDesc d;
-  d.solvent = Solvent::none();
-  const double c = tau / length / (100.0 * std::log(10.0) * eps);
-  d.pigments.push_back({{"grey", Spectrum::constant(eps), Spectrum::constant(0.f), 0.f}, Field::constant(float(c))});
-  const Medium m(d);
+  const double tau = 3.0;
+  const Medium m = grey_homogeneous(tau);
   const SampledWavelengths lambda = four_wavelengths();
   const PreparedMedium pm = prepare(m, lambda);
   ASSERT_TRUE(pm.grey);
-  const Ray ray{{0.1f, 0.2f, 0.3f}, Vec3{0.6f, 0.f, 0.8f} * 2.f};
   const double inv_q = 0.25 / std::exp(-tau);
   Rng rng(test_seed(77), 0);
   const int n = 40000;
   int survivors = 0;
   double sum = 0, sum2 = 0;
   for (int i = 0; i < n; ++i) {
-    const float T = transmittance(ray, float(length / 2.0), lambda, m, pm, TransmittanceEstimator::ratio, rng)[0];
+    const float T = transmittance(grey_slab_ray, grey_slab_t_max, lambda, m, pm, TransmittanceEstimator::ratio, rng)[0];
     if (T != 0.f) {
       ASSERT_NEAR(T, inv_q, 1e-4 * inv_q);
       ++survivors;
@@ -188,20 +194,13 @@ TEST(Transmittance, ExtremeOpticalDepthsStayFinite) {
   // tau ~ 80-88 the predicted roulette's q falls below the 24-bit resolution of a
   // uniform): every estimate must be finite, non-negative and, here, essentially 0.
   for (double tau : {60.0, 84.0, 87.0, 120.0, 1e4}) {
-    const double length = 0.3;
-    const float eps = 25000.f;
-    MediumDesc d;
-    d.solvent = Solvent::none();
-    const double c = tau / length / (100.0 * std::log(10.0) * eps);
-    d.pigments.push_back({{"grey", Spectrum::constant(eps), Spectrum::constant(0.f), 0.f}, Field::constant(float(c))});
-    const Medium m(d);
+    const Medium m = grey_homogeneous(tau);
     const SampledWavelengths lambda = four_wavelengths();
     const PreparedMedium pm = prepare(m, lambda);
-    const Ray ray{{0.1f, 0.2f, 0.3f}, Vec3{0.6f, 0.f, 0.8f} * 2.f};
     Rng rng(test_seed(78), 0);
     for (TransmittanceEstimator e : kTracking)
       for (int i = 0; i < 20000; ++i) {
-        const SampledSpectrum T = transmittance(ray, float(length / 2.0), lambda, m, pm, e, rng);
+        const SampledSpectrum T = transmittance(grey_slab_ray, grey_slab_t_max, lambda, m, pm, e, rng);
         for (int l = 0; l < 4; ++l) {
           ASSERT_TRUE(std::isfinite(T[l]) && T[l] >= 0.f) << to_string(e) << " tau " << tau << ": " << T[l];
           // A survivor of both roulettes carries at most 4096 x 0.25 x (1/q <= 4096): far below any overflow.
