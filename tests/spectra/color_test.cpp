@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/rng.h"
@@ -38,7 +39,9 @@ Estimate estimate_xyz(const Spectrum& s, int n, int count, uint64_t seed) {
 void expect_unbiased(const Spectrum& s, uint64_t seed) {
   const XYZ exact = spectrum_to_xyz(s);
   for (int count : {1, 4, 8}) {
-    const Estimate e = estimate_xyz(s, 20000, count, seed);
+    // 80000 paths: with one wavelength the z estimate is skewed (few samples fall where
+    // z-bar peaks), and at 20000 its sample standard error misled on 1 of 150 seeds.
+    const Estimate e = estimate_xyz(s, 80000, count, seed);
     EXPECT_NEAR(e.mean.x, exact.x, 4 * e.sigma.x + 1e-9 * exact.x) << s.source() << " count " << count;
     EXPECT_NEAR(e.mean.y, exact.y, 4 * e.sigma.y + 1e-9 * exact.y) << s.source() << " count " << count;
     EXPECT_NEAR(e.mean.z, exact.z, 4 * e.sigma.z + 1e-9 * exact.z) << s.source() << " count " << count;
@@ -62,14 +65,20 @@ TEST(Color, TerminatedLanesContributeNothingButKeepTheEstimateUnbiased) {
   // With only the hero lane left (pdf divided by count), the estimator still averages to the integral.
   const Spectrum d65 = named_spectrum("D65");
   Rng rng(test_seed(3), 0);
-  double sum = 0;
+  double sum = 0, sum2 = 0;
   const int n = 40000;
   for (int k = 0; k < n; ++k) {
     SampledWavelengths lambda = SampledWavelengths::sample_visible(rng.uniform(), 4);
     lambda.terminate_secondary();
-    sum += to_xyz(d65.sample(lambda), lambda).y;
+    const double y = to_xyz(d65.sample(lambda), lambda).y;
+    sum += y;
+    sum2 += y * y;
   }
-  EXPECT_NEAR(sum / n, spectrum_to_xyz(d65).y, 0.01 * spectrum_to_xyz(d65).y);
+  // 4 standard errors of this estimate (a fixed 1 % was 3 of them: a seed sweep failed it).
+  const double exact = spectrum_to_xyz(d65).y, mean = sum / n;
+  const double se = std::sqrt(std::max(0.0, sum2 / n - mean * mean) / (n - 1));
+  EXPECT_LT(se, 0.01 * exact);  // still a test of something
+  EXPECT_NEAR(mean, exact, 4.0 * se);
 }
 
 TEST(Color, ExactIntegralOfTabulatedSpectrumMatchesFineQuadrature) {
