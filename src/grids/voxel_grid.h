@@ -119,11 +119,11 @@ class VoxelGrid {
   const GridMetadata& metadata() const { return metadata_; }
 
  private:
-  // The stored value of voxel brick_base_ + i; i must lie in [0, 8 * bricks_).
   // f(value, count) for the voxels of [lo, hi]: stored ones one by one, each whole
   // background brick and the part of the box outside the stored voxels in one call.
   template <typename F>
   void for_each_value(Coord lo, Coord hi, F&& f) const;
+  // The stored value of voxel brick_base_ + i; i must lie in [0, 8 * bricks_).
   const float* brick_values(int ix, int iy, int iz) const {
     const int b = (ix >> 3) + bricks_[0] * ((iy >> 3) + bricks_[1] * (iz >> 3));
     return pool_.data() + size_t(table_[b]) * kBrickValues + (ix & 7) + kBrickStride * ((iy & 7) + kBrickStride * (iz & 7));
