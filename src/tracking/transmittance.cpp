@@ -69,6 +69,7 @@ SampledSpectrum ratio_tracking(const Track& k, Rng& rng) {
         }
         const float length = s.t_max - s.t_min;
         float rate = 0.f, tau_r_min = kInfinity;
+        float tau_r[kMaxWavelengths];  // per carried lane: the residual optical depth the cell's mean predicts
         for (int i = 0; i < k.n; ++i) {
           const float sigma_maj = k.prepared.sigma_t_lane(s.c_max, k.channels, i);
           const float sigma_mean = k.prepared.sigma_t_lane(s.c_mean, k.channels, i);
@@ -77,11 +78,12 @@ SampledSpectrum ratio_tracking(const Track& k, Rng& rng) {
             sigma_c[i] = k.prepared.sigma_t_lane(s.c_min, k.channels, i);
             tau_c[i] += sigma_c[i] * length;
             rate = std::max(rate, sigma_maj - sigma_c[i]);
-            tau_r_min = std::min(tau_r_min, (sigma_mean - sigma_c[i]) * length);
+            tau_r[i] = (sigma_mean - sigma_c[i]) * length;
           } else {
             rate = std::max(rate, sigma_maj);
-            tau_r_min = std::min(tau_r_min, sigma_mean * length);
+            tau_r[i] = sigma_mean * length;
           }
+          tau_r_min = std::min(tau_r_min, tau_r[i]);
         }
         // The predicted roulette: the cell's mean predicts what this segment will do
         // to the tracked factor. Where it would take every lane below the window, the
@@ -93,11 +95,7 @@ SampledSpectrum ratio_tracking(const Track& k, Rng& rng) {
         // tau_r_min is the least exponent over the lanes.
         if (tau_r_min > kPredictedRouletteMinTau) {
           float predicted = 0.f;
-          for (int i = 0; i < k.n; ++i) {
-            const float sigma_mean = k.prepared.sigma_t_lane(s.c_mean, k.channels, i);
-            const float sigma_r = kResidual ? sigma_mean - sigma_c[i] : sigma_mean;
-            predicted = std::max(predicted, T[i] * std::exp(-sigma_r * length));
-          }
+          for (int i = 0; i < k.n; ++i) predicted = std::max(predicted, T[i] * std::exp(-tau_r[i]));
           if (predicted < kRouletteWeight) {
             const float q = std::max(predicted / kRouletteWeight, kMinSurvival);
             if (!(rng.uniform() < q)) {
