@@ -118,17 +118,17 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
                 const MajorantTransmittance& T_maj) {
               const float sigma_t0 = c.sigma_t(0);  // the hero decides
               const float sigma_s = c.sigma_s(0);
-              const float p_absorb = (sigma_t0 - sigma_s) / sigma_maj[0];
-              const float p_scatter = sigma_s / sigma_maj[0];
-              const float u = rng.uniform();
-              if (u < p_absorb) {
+              // u sigma_maj against sigma_a, then sigma_t: the probabilities sigma / sigma_maj
+              // without a divide per collision.
+              const float u = rng.uniform() * sigma_maj[0];
+              if (u < sigma_t0 - sigma_s) {
                 if (scene.settings.fluorescence == FluorescenceMode::reference)
                   L.fluorescence +=
                       reference_fluorescence_event(scene, p, medium, beta / r_u.average(n), lambda, rng, stats);
                 terminated = true;
                 return false;
               }
-              if (u < p_absorb + p_scatter) {
+              if (u < sigma_t0) {
                 if (depth++ >= scene.settings.max_depth) {
                   terminated = true;
                   return false;
