@@ -119,19 +119,6 @@ Transform Transform::look_at(const Vec3& eye, const Vec3& target, const Vec3& up
   return from_matrix(m);
 }
 
-Vec3 Transform::point(const Vec3& p) const {
-  Vec3 r;
-  for (int i = 0; i < 3; ++i) r[i] = m_[i][0] * p.x + m_[i][1] * p.y + m_[i][2] * p.z + m_[i][3];
-  const float w = m_[3][0] * p.x + m_[3][1] * p.y + m_[3][2] * p.z + m_[3][3];
-  return w == 1.f ? r : r / w;
-}
-
-Vec3 Transform::vector(const Vec3& v) const {
-  Vec3 r;
-  for (int i = 0; i < 3; ++i) r[i] = m_[i][0] * v.x + m_[i][1] * v.y + m_[i][2] * v.z;
-  return r;
-}
-
 Vec3 Transform::normal(const Vec3& n) const {
   Vec3 r;
   for (int i = 0; i < 3; ++i) r[i] = m_inv_[0][i] * n.x + m_inv_[1][i] * n.y + m_inv_[2][i] * n.z;

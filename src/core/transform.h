@@ -17,8 +17,18 @@ class Transform {
   static Transform rotate(float degrees, const Vec3& axis);
   static Transform look_at(const Vec3& eye, const Vec3& target, const Vec3& up);  // world_from_camera
 
-  Vec3 point(const Vec3& p) const;
-  Vec3 vector(const Vec3& v) const;
+  // Inline: tracking maps every free flight and shadow ray into grid index space.
+  Vec3 point(const Vec3& p) const {
+    Vec3 r;
+    for (int i = 0; i < 3; ++i) r[i] = m_[i][0] * p.x + m_[i][1] * p.y + m_[i][2] * p.z + m_[i][3];
+    const float w = m_[3][0] * p.x + m_[3][1] * p.y + m_[3][2] * p.z + m_[3][3];
+    return w == 1.f ? r : r / w;
+  }
+  Vec3 vector(const Vec3& v) const {
+    Vec3 r;
+    for (int i = 0; i < 3; ++i) r[i] = m_[i][0] * v.x + m_[i][1] * v.y + m_[i][2] * v.z;
+    return r;
+  }
   Vec3 normal(const Vec3& n) const;  // uses the inverse transpose
   Transform inverse() const { return {m_inv_, m_}; }
   Transform operator*(const Transform& rhs) const;  // (a*b)(p) = a(b(p))

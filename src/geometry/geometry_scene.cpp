@@ -46,13 +46,22 @@ struct SphereShape {
 
 struct BoxShape {
   Bounds3 box;
+  Vec3 inv_size;  // 1 / box.diagonal(), for a hit's uv
   int shape_id;
+};
+
+// Where a ray crosses a box's surface: its parameter and the face (prim_id order).
+struct BoxCrossing {
+  float t;
+  int axis;
+  bool max_face;
 };
 
 // Closest crossing of the box's surface with t in (0, t_max]: the entry face
 // from outside, the exit face from inside (slab test, per axis the parameters of
 // both planes; an axis the ray is parallel to either excludes the ray or is skipped).
-std::optional<SurfaceHit> intersect_box(const BoxShape& b, const Ray& ray, float t_max) {
+// Only the crossing: GeometryScene::intersect builds the SurfaceHit of the nearest one.
+std::optional<BoxCrossing> cross_box(const BoxShape& b, const Ray& ray, float t_max) {
   float t_near = -kInfinity, t_far = kInfinity;
   int axis_near = -1, axis_far = -1;
   for (int a = 0; a < 3; ++a) {
@@ -79,20 +88,23 @@ std::optional<SurfaceHit> intersect_box(const BoxShape& b, const Ray& ray, float
   }
   if (!(t <= t_max) || axis < 0) return std::nullopt;
   // Entering across the max face means moving toward -axis; leaving across it, toward +axis.
-  const bool max_face = entering ? ray.d[axis] < 0.f : ray.d[axis] > 0.f;
+  return BoxCrossing{t, axis, entering ? ray.d[axis] < 0.f : ray.d[axis] > 0.f};
+}
+
+SurfaceHit box_hit(const BoxShape& b, const Ray& ray, const BoxCrossing& c) {
   SurfaceHit hit;
-  hit.t = t;
+  hit.t = c.t;
   hit.shape_id = b.shape_id;
-  hit.prim_id = 2 * axis + (max_face ? 1 : 0);
-  hit.p = ray.o + ray.d * t;
-  hit.p[axis] = max_face ? b.box.hi[axis] : b.box.lo[axis];  // exactly on the face
-  hit.p_error = kBoxErrorGamma * max_component(abs(ray.o) + abs(ray.d * t));
+  hit.prim_id = 2 * c.axis + (c.max_face ? 1 : 0);
+  hit.p = ray.o + ray.d * c.t;
+  hit.p[c.axis] = c.max_face ? b.box.hi[c.axis] : b.box.lo[c.axis];  // exactly on the face
+  hit.p_error = kBoxErrorGamma * max_component(abs(ray.o) + abs(ray.d * c.t));
   hit.ng = Vec3(0.f);
-  hit.ng[axis] = max_face ? 1.f : -1.f;
+  hit.ng[c.axis] = c.max_face ? 1.f : -1.f;
   hit.ns = hit.ng;
-  const int u_axis = axis == 0 ? 1 : 0, v_axis = axis == 2 ? 1 : 2;
-  const Vec3 size = b.box.diagonal();
-  hit.uv = {(hit.p[u_axis] - b.box.lo[u_axis]) / size[u_axis], (hit.p[v_axis] - b.box.lo[v_axis]) / size[v_axis]};
+  const int u_axis = c.axis == 0 ? 1 : 0, v_axis = c.axis == 2 ? 1 : 2;
+  hit.uv = {(hit.p[u_axis] - b.box.lo[u_axis]) * b.inv_size[u_axis],
+            (hit.p[v_axis] - b.box.lo[v_axis]) * b.inv_size[v_axis]};
   return hit;
 }
 
@@ -351,7 +363,7 @@ int GeometryScene::add_box(const Bounds3& box) {
   if (!(size.x > 0.f && size.y > 0.f && size.z > 0.f) || !is_finite(box.lo) || !is_finite(box.hi))
     throw std::invalid_argument("add_box: the box must be finite and have positive extent on every axis");
   const int id = int(impl_->shapes.size());
-  const BoxShape b{box, id};
+  const BoxShape b{box, Vec3(1.f / size.x, 1.f / size.y, 1.f / size.z), id};
   impl_->shapes.emplace_back(b);
   impl_->boxes.push_back(b);
   impl_->bounds.extend(box.lo);
@@ -383,17 +395,21 @@ std::optional<SurfaceHit> GeometryScene::intersect(const Ray& ray, float t_max) 
       t_max = hit->t;
     }
   }
+  const BoxShape* nearest_box = nullptr;
+  BoxCrossing nearest{};
   for (const BoxShape& b : impl_->boxes)
-    if (auto h = intersect_box(b, ray, t_max)) {
-      hit = h;
-      t_max = h->t;
+    if (const auto c = cross_box(b, ray, t_max)) {
+      nearest_box = &b;
+      nearest = *c;
+      t_max = c->t;
     }
+  if (nearest_box) hit = box_hit(*nearest_box, ray, nearest);
   return hit;
 }
 
 bool GeometryScene::occluded(const Ray& ray, float t_max) const {
   for (const BoxShape& b : impl_->boxes)
-    if (intersect_box(b, ray, t_max)) return true;
+    if (cross_box(b, ray, t_max)) return true;
   if (impl_->embree_shapes == 0) return false;
   RTCIntersectContext context;
   rtcInitIntersectContext(&context);

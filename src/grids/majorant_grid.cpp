@@ -170,7 +170,9 @@ void MajorantIterator::enter_cells(float t) {
   t_ = t;
   const Vec3 p = ray_cells_.at(t);
   for (int a = 0; a < 3; ++a) {
-    cell_[a] = std::clamp(int(std::floor(p[a])), 0, grid_->res_[a] - 1);
+    // Truncation, not std::floor (a call-sized sequence without SSE4.1): they differ
+    // only below 0, where the clamp gives 0 either way. p lies in the cells, up to rounding.
+    cell_[a] = std::clamp(int(p[a]), 0, grid_->res_[a] - 1);
     if (step_[a] > 0) next_crossing_[a] = t + (float(cell_[a] + 1) - p[a]) * inv_d_[a];
     else if (step_[a] < 0) next_crossing_[a] = t + (float(cell_[a]) - p[a]) * inv_d_[a];
     else next_crossing_[a] = 3e38f;
