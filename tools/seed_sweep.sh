@@ -22,7 +22,7 @@ while [[ $# -gt 0 ]]; do
   esac
   shift
 done
-declare -A failed_on
+declare -A failed_on=()  # "=()": set, so ${#failed_on[@]} works under set -u when nothing fails
 for k in $(seq "$from" "$to"); do
   log="$(CHLOROVDB_TEST_SEED_OFFSET=$k ctest --test-dir "$build" --parallel "$(nproc)" -LE 'long|fuzz|bench' \
            ${args[@]+"${args[@]}"} 2>&1 || true)"
