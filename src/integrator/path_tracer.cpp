@@ -133,7 +133,7 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
                   terminated = true;
                   return false;
                 }
-                const MediumProperties mp = c.properties();
+                const MediumScattering mp = c.scattering();
                 const SampledSpectrum T_m = T_maj();
                 const float pdf = T_m[0] * mp.sigma_s[0];
                 beta *= T_m * mp.sigma_s / pdf;

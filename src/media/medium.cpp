@@ -148,15 +148,29 @@ Medium::ChannelValues Medium::channel_values_of_each_grid(const Vec3& p_index) c
   return values;
 }
 
+MediumScattering Medium::scattering(const ChannelValues& v, const PreparedMedium& prepared) const {
+  MediumScattering ms;
+  ms.phase.particle = desc_.particle_phase;
+  // Lane by lane over the carried wavelengths only: this runs at every real collision.
+  for (int i = 0; i < prepared.lambda_count; ++i) {
+    const float particle = sigma_s_particle(v, prepared, i);
+    const float sigma_s = prepared.sigma_s_molecular[i] + particle;
+    ms.sigma_s[i] = sigma_s;
+    ms.phase.particle_fraction[i] = sigma_s > 0.f ? particle / sigma_s : 0.f;
+  }
+  return ms;
+}
+
 MediumProperties Medium::properties(const ChannelValues& v, const PreparedMedium& prepared) const {
   MediumProperties mp;
-  mp.phase.particle = desc_.particle_phase;
+  const MediumScattering ms = scattering(v, prepared);
+  mp.sigma_s = ms.sigma_s;
+  mp.phase = ms.phase;
   const int pigments = pigment_count();
   for (int k = 0; k < pigments; ++k) {
     const int c = pigment_channel_[k];
     mp.concentration[k] = c < 0 ? pigment_constant_[k] : v[c] * pigment_scale_[k];
   }
-  // Lane by lane over the carried wavelengths only: this runs at every real collision.
   for (int i = 0; i < prepared.lambda_count; ++i) {
     float sigma_a = prepared.sigma_a_constant[i];  // holds the constant pigments already
     for (int k = 0; k < pigments; ++k) {
@@ -164,11 +178,7 @@ MediumProperties Medium::properties(const ChannelValues& v, const PreparedMedium
       mp.sigma_a_pigment[k][i] = sigma_a_k;
       if (pigment_channel_[k] >= 0) sigma_a += sigma_a_k;
     }
-    const float particle = sigma_s_particle(v, prepared, i);
-    const float sigma_s = prepared.sigma_s_molecular[i] + particle;
     mp.sigma_a[i] = sigma_a;
-    mp.sigma_s[i] = sigma_s;
-    mp.phase.particle_fraction[i] = sigma_s > 0.f ? particle / sigma_s : 0.f;
   }
   return mp;
 }

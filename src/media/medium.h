@@ -74,6 +74,14 @@ struct MediumProperties {
   MediumPhase phase;
 };
 
+// What a scattering event needs of the medium at its point: a path scattering in
+// a medium reads only these, so it skips the per-pigment absorption (a tenth of
+// the work at each scattering event of a thick cloud).
+struct MediumScattering {
+  SampledSpectrum sigma_s;  // 1/m: molecules + particles
+  MediumPhase phase;
+};
+
 // A medium's spectra evaluated at one path's wavelengths (prepare()).
 struct PreparedMedium {
   int lambda_count = 0;
@@ -164,6 +172,7 @@ class Medium {
     return prepared.sigma_s_molecular[lane] + sigma_s_particle(v, prepared, lane);
   }
   MediumProperties properties(const ChannelValues& v, const PreparedMedium& prepared) const;
+  MediumScattering scattering(const ChannelValues& v, const PreparedMedium& prepared) const;
   SampledSpectrum sigma_t(const Vec3& p_index, const PreparedMedium& prepared) const {
     return sigma_t(channel_values(p_index), prepared);
   }

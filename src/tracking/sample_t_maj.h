@@ -30,8 +30,9 @@ namespace chlorovdb {
 
 // The medium at a tentative collision, looked up once. Most collisions in thick
 // media are null and need only sigma_t (and the hero's sigma_s to tell absorption
-// from scattering); the full MediumProperties (per-pigment parts, phase) are
-// computed only where a caller asks, at real collisions.
+// from scattering); the full MediumProperties (per-pigment parts, phase), or the
+// MediumScattering a scattering event needs, are computed only where a caller
+// asks, at real collisions.
 struct MediumCollision {
   const Medium& medium;
   const PreparedMedium& prepared;
@@ -41,6 +42,7 @@ struct MediumCollision {
   float sigma_t(int lane) const { return medium.sigma_t(values, prepared, lane); }
   float sigma_s(int lane) const { return medium.sigma_s(values, prepared, lane); }
   MediumProperties properties() const { return medium.properties(values, prepared); }
+  MediumScattering scattering() const { return medium.scattering(values, prepared); }
 };
 
 // e^{-sigma_maj dt} since the previous collision, evaluated only when asked: a

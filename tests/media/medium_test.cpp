@@ -85,6 +85,29 @@ TEST(Medium, GridConcentrationIsLookedUpInWorldSpace) {
   EXPECT_EQ(region->index_bounds.hi.x, 15.5f);
 }
 
+TEST(Medium, ScatteringIsThePropertiesScatteringPart) {
+  // A scattering event asks for MediumScattering alone: it must be what the full
+  // MediumProperties say, with molecules (water) and particles (a grid) both scattering.
+  const auto grid = ramp_grid();
+  MediumDesc d;
+  d.solvent = Solvent::water(Spectrum::constant(0.1f), Spectrum::constant(1.337f));
+  d.pigments.push_back({ramp_pigment(), Field::from_grid(grid, 1e-6f)});
+  d.particle_sigma_s = Field::from_grid(grid, 0.5f);
+  d.particle_phase = HenyeyGreenstein{0.6f};
+  const Medium m(d);
+  const PreparedMedium pm = prepare(m, four_wavelengths());
+  for (const Vec3 p_world : {Vec3{0.0725f, 0.1f, 0.05f}, Vec3{0.001f, 0.2f, 0.1f}, Vec3{0.5f, 0.5f, 0.5f}}) {
+    const Medium::ChannelValues v = m.channel_values(m.index_point(p_world));
+    const MediumProperties mp = m.properties(v, pm);
+    const MediumScattering ms = m.scattering(v, pm);
+    for (int i = 0; i < kMaxWavelengths; ++i) {
+      EXPECT_EQ(ms.sigma_s[i], mp.sigma_s[i]);
+      EXPECT_EQ(ms.phase.particle_fraction[i], mp.phase.particle_fraction[i]);
+    }
+    EXPECT_EQ(std::get<HenyeyGreenstein>(ms.phase.particle).g, 0.6f);
+  }
+}
+
 TEST(Medium, MajorantBoundsEveryLaneOnRandomPoints) {
   const auto grid = ramp_grid();
   MediumDesc d;
