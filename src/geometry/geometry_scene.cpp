@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "core/constants.h"
+#include "core/float_bits.h"
 
 namespace chlorovdb {
 namespace {
@@ -194,8 +195,8 @@ Vec3 offset_origin(const SurfaceHit& hit, const Vec3& w) {
   if (dot(w, hit.ng) < 0.f) offset = -offset;
   Vec3 po = hit.p + offset;
   for (int a = 0; a < 3; ++a) {
-    if (offset[a] > 0.f) po[a] = std::nextafter(po[a], std::numeric_limits<float>::infinity());
-    else if (offset[a] < 0.f) po[a] = std::nextafter(po[a], -std::numeric_limits<float>::infinity());
+    if (offset[a] > 0.f) po[a] = next_float_up(po[a]);
+    else if (offset[a] < 0.f) po[a] = next_float_down(po[a]);
   }
   return po;
 }
