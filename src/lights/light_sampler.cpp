@@ -25,8 +25,16 @@ LightSampler::LightSampler(std::span<const int> light_indices, std::span<const f
     max_index = std::max(max_index, light_indices[k]);
   }
   if (!(total > 0)) return;  // nothing emits: an empty sampler, not a uniform fallback
-  indices_.assign(light_indices.begin(), light_indices.end());
-  distribution_ = Distribution1D(weights);
+  // Only lights that can be chosen are candidates: a scene whose NEE reaches one light
+  // (the sun beside an environment left to phase sampling, a lone lamp) then needs no
+  // search at each scattering event.
+  std::vector<float> candidate_weights;
+  for (size_t k = 0; k < weights.size(); ++k) {
+    if (weights[k] == 0.f) continue;
+    indices_.push_back(light_indices[k]);
+    candidate_weights.push_back(weights[k]);
+  }
+  distribution_ = Distribution1D(candidate_weights);
   pmf_by_light_.assign(max_index + 1, 0.f);
   for (size_t k = 0; k < indices_.size(); ++k) pmf_by_light_[indices_[k]] += distribution_.pmf(int(k));
 }
@@ -44,7 +52,7 @@ LightSampler LightSampler::power(std::span<const Light> lights, const GeometrySc
 
 std::optional<SampledLight> LightSampler::sample(float u) const {
   if (indices_.empty()) return std::nullopt;
-  const int k = distribution_.sample(u);
+  const int k = indices_.size() == 1 ? 0 : distribution_.sample(u);
   return SampledLight{indices_[k], pmf_by_light_[indices_[k]]};
 }
 

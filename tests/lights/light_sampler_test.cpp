@@ -55,6 +55,25 @@ TEST(LightSampler, SubsetOnlyChoosesItsMembers) {
   EXPECT_LT(chi_square(sampler, 10, 100000, 2), 13.8) << "2 dof, p = 0.001";
 }
 
+TEST(LightSampler, ZeroWeightLightsAreNeverCandidates) {
+  // The cloud benchmark's camera paths: an environment (weight 0, left to phase
+  // sampling) and the sun. The sun is chosen for every u, with pmf 1.
+  const LightSampler sampler(std::vector<float>{0.f, 2.f, 0.f});
+  EXPECT_EQ(sampler.pmf(0), 0.f);
+  EXPECT_EQ(sampler.pmf(1), 1.f);
+  for (const float u : {0.f, 0.25f, 0.5f, 0x1.fffffep-1f}) {
+    const auto s = sampler.sample(u);
+    ASSERT_TRUE(s);
+    EXPECT_EQ(s->index, 1);
+    EXPECT_EQ(s->pmf, 1.f);
+  }
+  // With zero weights between positive ones, the frequencies still follow the pmf.
+  const LightSampler mixed(std::vector<int>{4, 1, 7, 3}, std::vector<float>{0.f, 1.f, 0.f, 3.f});
+  EXPECT_FLOAT_EQ(mixed.pmf(3), 0.75f);
+  EXPECT_EQ(mixed.pmf(4), 0.f);
+  EXPECT_LT(chi_square(mixed, 8, 100000, 4), 10.8) << "1 dof, p = 0.001";
+}
+
 TEST(LightSampler, UniformAndEmpty) {
   const LightSampler uniform = LightSampler::uniform(4);
   for (int i = 0; i < 4; ++i) EXPECT_FLOAT_EQ(uniform.pmf(i), 0.25f);
