@@ -171,7 +171,7 @@ void BM_MajorantGrid_Build(benchmark::State& state) {
   const Field& f = field(int(state.range(0)));
   const VoxelGrid* grids[] = {&f.bricked};
   for (auto _ : state) {
-    MajorantGrid m(grids, int(state.range(1)));
+    MajorantGrid m(grids, int(state.range(1)), Interpolation::trilinear);
     benchmark::DoNotOptimize(m.resolution());
   }
 }

@@ -3,9 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <stdexcept>
+#include <tuple>
 #include <vector>
 
 #include <tbb/parallel_for.h>
+
+#include "core/float_bits.h"
 
 namespace chlorovdb {
 namespace {
@@ -30,9 +33,45 @@ void stencil_voxels(const Bounds3& b, Coord* lo, Coord* hi) {
   }
 }
 
+// Min and max of every value a trilinear lookup within kStencilMargin of the voxels
+// lo..hi (the box [lo - 1/2, hi + 1/2]) returns. Between voxel centres the interpolant is
+// multilinear, so its extremes over the box lie at centres inside it or on its faces,
+// and a face value blends an outer voxel (weight 1/2 + margin) with its inner
+// neighbour, axis by axis. Counting the outer layer whole instead, as a nearest lookup
+// needs, lets it set the majorant wherever the field rises toward a cell's face.
+// Blended in double, rounded outward to float.
+std::pair<float, float> trilinear_min_max(const VoxelGrid& g, Coord lo, Coord hi) {
+  static_assert(kStencilMargin < 0.5f, "a face value blends the outer voxel with its inner neighbour only");
+  const int n[3] = {hi[0] - lo[0] + 3, hi[1] - lo[1] + 3, hi[2] - lo[2] + 3};
+  // Cells are built in parallel: each thread reuses its blocks.
+  thread_local std::vector<float> values;
+  thread_local std::vector<double> v;
+  values.resize(size_t(n[0]) * n[1] * n[2]);
+  g.copy_block({lo[0] - 1, lo[1] - 1, lo[2] - 1}, {hi[0] + 1, hi[1] + 1, hi[2] + 1}, values.data());
+  v.assign(values.begin(), values.end());
+  const double outer = 0.5 + double(kStencilMargin), inner = 0.5 - double(kStencilMargin);
+  const size_t stride[3] = {1, size_t(n[0]), size_t(n[0]) * n[1]};
+  for (int a = 0; a < 3; ++a) {
+    const int b = (a + 1) % 3, c = (a + 2) % 3;  // the two other axes
+    for (int j = 0; j < n[c]; ++j)
+      for (int i = 0; i < n[b]; ++i) {
+        double* row = &v[i * stride[b] + j * stride[c]];
+        const size_t last = size_t(n[a] - 1) * stride[a];
+        row[0] = outer * row[0] + inner * row[stride[a]];
+        row[last] = outer * row[last] + inner * row[last - stride[a]];
+      }
+  }
+  const auto [mn, mx] = std::minmax_element(v.begin(), v.end());
+  float lo_f = float(*mn), hi_f = float(*mx);
+  if (double(lo_f) > *mn) lo_f = next_float_down(lo_f);
+  if (double(hi_f) < *mx) hi_f = next_float_up(hi_f);
+  return {lo_f, hi_f};
+}
+
 }  // namespace
 
-MajorantGrid::MajorantGrid(std::span<const VoxelGrid* const> channels, int voxels_per_cell)
+MajorantGrid::MajorantGrid(std::span<const VoxelGrid* const> channels, int voxels_per_cell,
+                           Interpolation interpolation)
     : channels_(int(channels.size())), voxels_per_cell_(voxels_per_cell), inv_cell_size_(1.f / float(voxels_per_cell)) {
   if (channels.empty()) return;
   if (channels.size() > size_t(kMaxMajorantChannels))
@@ -78,18 +117,23 @@ MajorantGrid::MajorantGrid(std::span<const VoxelGrid* const> channels, int voxel
     const Bounds3 cell{lo, lo + Vec3(float(voxels_per_cell))};
     bool empty = true;
     for (int k = 0; k < channels_; ++k) {
-      Coord vlo, vhi;
-      stencil_voxels(same_space[k] ? cell : map_box(cell, channel_from_majorant[k]), &vlo, &vhi);
-      const auto [mn, mx] = channels[k]->min_max(vlo, vhi);
-      bounds_[i * stride() + k] = mx;
-      bounds_[i * stride() + channels_ + k] = mn;
+      const Bounds3 box = same_space[k] ? cell : map_box(cell, channel_from_majorant[k]);
       // The voxels whose centres lie in the cell (its faces are on voxel faces).
-      const Bounds3 own = same_space[k] ? cell : map_box(cell, channel_from_majorant[k]);
       Coord olo, ohi;
       for (int a = 0; a < 3; ++a) {
-        olo[a] = int(std::ceil(own.lo[a]));
-        ohi[a] = std::max(olo[a], int(std::floor(own.hi[a])));
+        olo[a] = int(std::ceil(box.lo[a]));
+        ohi[a] = std::max(olo[a], int(std::floor(box.hi[a])));
       }
+      // Nearest lookups, and cells of another grid's space (a rotated box there): the
+      // voxels of the stencil bound them.
+      Coord vlo, vhi;
+      stencil_voxels(box, &vlo, &vhi);
+      auto [mn, mx] = channels[k]->min_max(vlo, vhi);
+      // A uniform stencil (empty space, most of a sparse grid) bounds itself exactly.
+      if (interpolation == Interpolation::trilinear && same_space[k] && mn < mx)
+        std::tie(mn, mx) = trilinear_min_max(*channels[k], olo, ohi);
+      bounds_[i * stride() + k] = mx;
+      bounds_[i * stride() + channels_ + k] = mn;
       bounds_[i * stride() + 2 * channels_ + k] = channels[k]->mean(olo, ohi);
       if (mx != 0.f) empty = false;
     }

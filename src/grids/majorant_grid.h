@@ -1,11 +1,12 @@
 #pragma once
 // MajorantGrid: coarse cells over one or more VoxelGrids ("channels"), each
-// cell holding per channel the max and min of every value a lookup inside the
-// cell can return: the max / min over the voxels a trilinear or nearest lookup
-// within a quarter voxel of the cell reads (cell faces lie on voxel faces, so an
-// n-voxel cell reads n + 2 voxels per axis, and points that rounding puts a hair
-// outside the cell are covered too). An under-estimated majorant would bias
-// tracking silently; tests/grids and tests/tracking check this bound.
+// cell holding per channel the max and min of every value a lookup within a
+// quarter voxel of the cell can return (points that rounding puts a hair outside
+// the cell are covered too). Cell faces lie on voxel faces, so an n-voxel cell
+// reads n + 2 voxels per axis. A nearest lookup can return any of them; a
+// trilinear one weighs the outer layer by at most 3/4, and its bounds count it so
+// (majorant_grid.cpp). An under-estimated majorant would bias tracking silently;
+// tests/grids and tests/tracking check this bound.
 //
 // MajorantIterator walks the cells a ray crosses (3-D DDA, Amanatides & Woo)
 // and yields segments in the ray's own parameter t. Runs of cells whose maxima
@@ -48,7 +49,8 @@ class MajorantGrid {
   // other channels may have other transforms (their bounds are then taken over
   // each cell's bounding box in their own index space). Cells are cubes of
   // voxels_per_cell voxels of channels[0] and cover every channel's support.
-  MajorantGrid(std::span<const VoxelGrid* const> channels, int voxels_per_cell);
+  // The bounds hold for lookups with `interpolation`.
+  MajorantGrid(std::span<const VoxelGrid* const> channels, int voxels_per_cell, Interpolation interpolation);
 
   // Segments covering [0, t_max] of a ray given in majorant index space.
   inline MajorantIterator segments(const Ray& ray_index, float t_max) const;

@@ -205,6 +205,27 @@ float VoxelGrid::voxel(int x, int y, int z) const {
   return *brick_values(ix, iy, iz);
 }
 
+void VoxelGrid::copy_block(Coord lo, Coord hi, float* out) const {
+  const int extent[3] = {8 * bricks_[0], 8 * bricks_[1], 8 * bricks_[2]};
+  for (int z = lo[2]; z <= hi[2]; ++z)
+    for (int y = lo[1]; y <= hi[1]; ++y) {
+      const int iy = y - brick_base_[1], iz = z - brick_base_[2];
+      const bool row_stored = iy >= 0 && iz >= 0 && iy < extent[1] && iz < extent[2];
+      for (int x = lo[0]; x <= hi[0];) {
+        const int ix = x - brick_base_[0];
+        if (!row_stored || ix < 0 || ix >= extent[0]) {
+          *out++ = background_;
+          ++x;
+          continue;
+        }
+        // The rest of this brick's row is contiguous.
+        const int run = std::min(hi[0] - x + 1, 8 - (ix & 7));
+        out = std::copy_n(brick_values(ix, iy, iz), run, out);
+        x += run;
+      }
+    }
+}
+
 template <typename F>
 void VoxelGrid::for_each_value(Coord lo, Coord hi, F&& f) const {
   int64_t total = 1;

@@ -94,6 +94,9 @@ class VoxelGrid {
   float voxel(int x, int y, int z) const;
   // Min and max of the voxel values in the inclusive index box [lo, hi].
   std::pair<float, float> min_max(Coord lo, Coord hi) const;
+  // The values of [lo, hi] into out (x fastest, (hi - lo + 1) per axis; background
+  // outside the stored voxels): a brick's row at a time, not a lookup per voxel.
+  void copy_block(Coord lo, Coord hi, float* out) const;
   // Their mean (the background counts for voxels outside the stored ones).
   float mean(Coord lo, Coord hi) const;
 

@@ -65,7 +65,7 @@ Medium::Medium(MediumDesc desc) : desc_(std::move(desc)) {
   }
   if (channels_.size() == 1 && channels_[0].same_space) single_grid_ = channels_[0].grid;
   if (desc_.majorant_voxels_per_cell > 0) {
-    majorants_ = MajorantGrid(grids, desc_.majorant_voxels_per_cell);
+    majorants_ = MajorantGrid(grids, desc_.majorant_voxels_per_cell, desc_.interpolation);
     return;
   }
   // sigma_t per unit of each grid's value, averaged over wavelengths the renderer draws.
@@ -77,7 +77,7 @@ Medium::Medium(MediumDesc desc) : desc_(std::move(desc)) {
                                        length(world_from_index_.vector({0.f, 0.f, 1.f})));
   double least = 0.0;
   for (const int size : kMajorantCellSizes) {
-    MajorantGrid candidate(grids, size);
+    MajorantGrid candidate(grids, size, desc_.interpolation);
     const double cost = candidate.tracking_cost(std::span(sigma_per_value).first(channels()), voxel_length,
                                                 kSegmentCostInCollisions);
     // The first candidate is taken whatever its cost: with extreme coefficients every cost is inf.

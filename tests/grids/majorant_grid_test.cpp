@@ -56,7 +56,7 @@ std::vector<MajorantSegment> collect(const MajorantGrid& m, const Ray& r, float 
 TEST(MajorantGrid, SegmentsTileTheRayExactly) {
   const VoxelGrid g = VoxelGrid::from_dense(spiky_grid({40, 33, 27}, 1));
   const VoxelGrid* channels[] = {&g};
-  const MajorantGrid m(channels, 8);
+  const MajorantGrid m(channels, 8, Interpolation::trilinear);
   Rng rng(test_seed(2), 0);
   for (int i = 0; i < 5000; ++i) {
     const Ray r = random_ray(g.index_bounds(), rng, i % 4 == 0);
@@ -85,29 +85,52 @@ TEST(MajorantGrid, NoLookupExceedsItsSegmentBounds) {
   const VoxelGrid* channels[] = {&g0, &g1};
   Rng rng(test_seed(5), 0);
   int64_t checked = 0;
-  for (int voxels_per_cell : {1, 3, 8, 16}) {
-    const MajorantGrid m(channels, voxels_per_cell);
-    for (int i = 0; i < 3000; ++i) {
-      const Ray r = random_ray(m.index_bounds(), rng, i % 5 == 0);
-      for (const MajorantSegment& s : collect(m, r, 150.f)) {
-        for (int k = 0; k < 24; ++k) {
-          // The end points too: lookups there belong to both neighbours.
-          const float u = k == 0 ? 0.f : (k == 1 ? 1.f : rng.uniform());
-          const Vec3 p = r.at(s.t_min + u * (s.t_max - s.t_min));
-          const Vec3 p1 = g1_from_g0.point(p);
-          for (Interpolation mode : {Interpolation::trilinear, Interpolation::nearest}) {
-            const float v0 = g0.lookup(p, mode), v1 = g1.lookup(p1, mode);
-            ASSERT_LE(v0, s.c_max[0]) << "cell size " << voxels_per_cell;
-            ASSERT_GE(v0, s.c_min[0]) << "cell size " << voxels_per_cell;
-            ASSERT_LE(v1, s.c_max[1]) << "cell size " << voxels_per_cell;
-            ASSERT_GE(v1, s.c_min[1]) << "cell size " << voxels_per_cell;
+  for (Interpolation mode : {Interpolation::trilinear, Interpolation::nearest})
+    for (int voxels_per_cell : {1, 3, 8, 16}) {
+      const MajorantGrid m(channels, voxels_per_cell, mode);
+      for (int i = 0; i < 3000; ++i) {
+        const Ray r = random_ray(m.index_bounds(), rng, i % 5 == 0);
+        for (const MajorantSegment& s : collect(m, r, 150.f)) {
+          for (int k = 0; k < 24; ++k) {
+            // The end points too: lookups there belong to both neighbours.
+            const float u = k == 0 ? 0.f : (k == 1 ? 1.f : rng.uniform());
+            const Vec3 p = r.at(s.t_min + u * (s.t_max - s.t_min));
+            const float v0 = g0.lookup(p, mode), v1 = g1.lookup(g1_from_g0.point(p), mode);
+            const bool nearest = mode == Interpolation::nearest;
+            ASSERT_LE(v0, s.c_max[0]) << "cell size " << voxels_per_cell << ", nearest " << nearest;
+            ASSERT_GE(v0, s.c_min[0]) << "cell size " << voxels_per_cell << ", nearest " << nearest;
+            ASSERT_LE(v1, s.c_max[1]) << "cell size " << voxels_per_cell << ", nearest " << nearest;
+            ASSERT_GE(v1, s.c_min[1]) << "cell size " << voxels_per_cell << ", nearest " << nearest;
             ++checked;
           }
         }
       }
     }
-  }
   EXPECT_GT(checked, 1000000);
+}
+
+TEST(MajorantGrid, TrilinearBoundsWeighTheOuterVoxelsByThreeQuarters) {
+  // A ramp along x, value = voxel index + 1. A lookup within a quarter voxel of a cell
+  // reaches a quarter voxel short of its outer voxels' centres, so a trilinear one
+  // returns at most the last own value + 3/4 and at least the first - 3/4, while a
+  // nearest one returns the outer voxels' values themselves.
+  DenseGrid d({16, 16, 16});
+  for (int z = 0; z < 16; ++z)
+    for (int y = 0; y < 16; ++y)
+      for (int x = 0; x < 16; ++x) d.at(x, y, z) = float(x + 1);
+  const VoxelGrid g = VoxelGrid::from_dense(d);
+  const VoxelGrid* channels[] = {&g};
+  const MajorantGrid tri(channels, 4, Interpolation::trilinear), near(channels, 4, Interpolation::nearest);
+  // A cell whose own voxels and outer layer lie inside the grid on every axis.
+  const Coord cell{2, 2, 2};
+  Coord own_lo;
+  for (int a = 0; a < 3; ++a) own_lo[a] = int(std::ceil(tri.index_bounds().lo[a])) + 4 * cell[a];
+  for (int a = 0; a < 3; ++a) ASSERT_TRUE(own_lo[a] >= 1 && own_lo[a] + 4 <= 15) << "axis " << a;
+  const float first = float(own_lo[0] + 1), last = first + 3.f;
+  EXPECT_FLOAT_EQ(tri.cell_max(cell, 0), last + 0.75f);
+  EXPECT_FLOAT_EQ(tri.cell_min(cell, 0), first - 0.75f);
+  EXPECT_EQ(near.cell_max(cell, 0), last + 1.f);
+  EXPECT_EQ(near.cell_min(cell, 0), first - 1.f);
 }
 
 TEST(MajorantGrid, JumpsOverEmptySpaceKeepTheBoundsAndTheTiling) {
@@ -125,7 +148,7 @@ TEST(MajorantGrid, JumpsOverEmptySpaceKeepTheBoundsAndTheTiling) {
   const VoxelGrid* channels[] = {&g};
   int64_t nonzero = 0;
   for (int voxels_per_cell : {1, 4, 8}) {
-    const MajorantGrid m(channels, voxels_per_cell);
+    const MajorantGrid m(channels, voxels_per_cell, Interpolation::trilinear);
     for (int i = 0; i < 3000; ++i) {
       const Ray r = random_ray(m.index_bounds(), rng, i % 5 == 0);
       const auto segs = collect(m, r, 600.f);
@@ -152,7 +175,7 @@ TEST(MajorantGrid, EmptyRunsComeOutAsOneSegment) {
   for (int x : {20, 100}) d.at(x, 8, 8) = 1.f;  // two isolated voxels along one line
   const VoxelGrid g = VoxelGrid::from_dense(d);
   const VoxelGrid* channels[] = {&g};
-  const MajorantGrid m(channels, 4);
+  const MajorantGrid m(channels, 4, Interpolation::trilinear);
   const auto segs = collect(m, Ray{{-50.f, 8.f, 8.f}, {1.f, 0.f, 0.f}}, 300.f);
   // empty | cells around x = 20 | empty | cells around x = 100 | empty
   int empty_runs = 0;
@@ -170,7 +193,7 @@ TEST(MajorantGrid, EmptyRunsComeOutAsOneSegment) {
 TEST(MajorantGrid, RayOnCellBoundaryPlanesAndMissingRays) {
   const VoxelGrid g = VoxelGrid::from_dense(spiky_grid({32, 32, 32}, 6));
   const VoxelGrid* channels[] = {&g};
-  const MajorantGrid m(channels, 8);
+  const MajorantGrid m(channels, 8, Interpolation::trilinear);
   const Bounds3 b = m.index_bounds();
   // Exactly on the planes between cells, along each axis and both directions.
   for (int a = 0; a < 3; ++a)
@@ -207,7 +230,7 @@ TEST(MajorantGrid, CellMeansAreTheMeansOfTheirOwnVoxels) {
   const VoxelGrid g = VoxelGrid::from_dense(d);
   const VoxelGrid* channels[] = {&g};
   for (int voxels_per_cell : {1, 3, 8}) {
-    const MajorantGrid m(channels, voxels_per_cell);
+    const MajorantGrid m(channels, voxels_per_cell, Interpolation::trilinear);
     const Vec3 origin = m.index_bounds().lo;  // cell faces on voxel faces: origin is a half-integer
     const Coord res = m.resolution();
     for (int z = 0; z < res[2]; ++z)

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 #include "core/error.h"
 #include "core/rng.h"
@@ -136,6 +137,27 @@ TEST(VoxelGrid, MinMaxAndMeanOverBoxes) {
     ASSERT_EQ(gmx, mx);
     const double count = double(hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1);
     ASSERT_NEAR(g.mean(lo, hi), sum / count, 1e-6 * std::max(1.0, std::abs(sum / count)));
+  }
+}
+
+TEST(VoxelGrid, CopyBlockMatchesEachVoxel) {
+  // Boxes across brick borders and past the stored voxels, with a non-zero background.
+  DenseGrid d = random_grid({21, 18, 19}, {-5, 2, -9}, 8);
+  d.background = 0.5f;
+  const VoxelGrid g = VoxelGrid::from_dense(d);
+  Rng rng(test_seed(9), 0);
+  for (int i = 0; i < 300; ++i) {
+    Coord lo, hi;
+    for (int a = 0; a < 3; ++a) {
+      lo[a] = d.origin[a] - 4 + int(rng.uniform() * float(d.dims[a] + 4));
+      hi[a] = lo[a] + int(rng.uniform() * 18.f);
+    }
+    std::vector<float> block(size_t(hi[0] - lo[0] + 1) * (hi[1] - lo[1] + 1) * (hi[2] - lo[2] + 1), -1.f);
+    g.copy_block(lo, hi, block.data());
+    size_t k = 0;
+    for (int z = lo[2]; z <= hi[2]; ++z)
+      for (int y = lo[1]; y <= hi[1]; ++y)
+        for (int x = lo[0]; x <= hi[0]; ++x, ++k) ASSERT_EQ(block[k], reference_voxel(d, x, y, z)) << x << " " << y << " " << z;
   }
 }
 

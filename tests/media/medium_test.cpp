@@ -201,7 +201,7 @@ TEST(Medium, TrackingCostOfAUniformGrid) {
   DenseGrid g({8, 8, 8}, 0.5f);
   const VoxelGrid grid = VoxelGrid::from_dense(g);
   const VoxelGrid* grids[] = {&grid};
-  const MajorantGrid m(grids, 4);
+  const MajorantGrid m(grids, 4, Interpolation::trilinear);
   int non_empty = 0;
   for (int z = 0; z < m.resolution()[2]; ++z)
     for (int y = 0; y < m.resolution()[1]; ++y)
