@@ -4,8 +4,9 @@
 // slab the pairs differ by under 4 % (session 7), since the skipped work is
 // cheap here and what the skips mostly save is noise (light samples spent on
 // lamps that cannot excite, lanes a hero-wavelength absorption would kill):
-// that shows as efficiency in docs/benchmarks.md (the skips=off rows). The q0
-// pair toggles nothing: a pigment with Q = 0 is never registered as fluorescent.
+// that shows as efficiency in docs/benchmarks.md (the skips=off rows). A pigment
+// with Q = 0 has no pair: it is never fluorescent (scene/medium_param.cpp), whatever
+// skip_unneeded_work says, so there is nothing to switch.
 //   build/bench/integrator/bench_integrator --benchmark_min_time=2
 #include <benchmark/benchmark.h>
 
@@ -51,7 +52,6 @@ BENCHMARK(BM_DefaultScene)->Arg(1)->Arg(2)->ArgName("threads")->Unit(benchmark::
 // A 1 cm chlorophyll slab seen through, lit by a lamp; `variant` picks what the
 // skip should remove.
 std::string skip_scene(const std::string& variant, bool skip) {
-  const std::string q = variant == "q0" ? "0" : "0.23";
   const std::string solvent = variant == "absorbing" ? R"({"rayleigh": false})" : R"("water")";
   // "dark_lights": three red lamps (beyond chlorophyll's 700 nm table end) and one UV lamp.
   std::string lights = R"({"type": "point", "position": [0, 0.3, 1], "spectrum": "UVB", "scale": 50})";
@@ -63,7 +63,7 @@ std::string skip_scene(const std::string& variant, bool skip) {
     "render": {"resolution": [64, 64], "wavelengths": 8, "fluorescence": "direct", "skip_unneeded_work": )") +
          (skip ? "true" : "false") + R"(},
     "camera": {"position": [0, 0, 1], "look_at": [0, 0, 0], "fov": 30},
-    "pigments": {"chl": {"extinction": "chlorophyll_a", "quantum_yield": )" + q + R"(}},
+    "pigments": {"chl": {"extinction": "chlorophyll_a", "quantum_yield": 0.23}},
     "materials": {"boundary": {"type": "interface"}, "floor": {"type": "diffuse", "albedo": 0.5}},
     "media": {"solution": {"solvent": )" + solvent + R"(,
               "pigments": [{"pigment": "chl", "concentration": 5, "unit": "uM"}]}},
@@ -86,10 +86,9 @@ void BM_Skip(benchmark::State& state, const std::string& variant, bool skip) {
   BENCHMARK_CAPTURE(BM_Skip, name##_skip_off, std::string(#name), false)                                \
       ->Unit(benchmark::kMillisecond)                                                                   \
       ->MeasureProcessCPUTime();
-SKIP_PAIR(q0)           // no fluorescent pigment: Q = 0
-SKIP_PAIR(dark_lights)  // lights that cannot excite are never picked
-SKIP_PAIR(absorbing)    // nothing scatters: transmittance instead of delta tracking
-SKIP_PAIR(emission_band)  // (same scene as q0 with Q > 0: paths with no emission wavelength skip the event)
+SKIP_PAIR(dark_lights)    // lights that cannot excite are never picked
+SKIP_PAIR(absorbing)      // nothing scatters: transmittance instead of delta tracking
+SKIP_PAIR(emission_band)  // paths with no wavelength in the emission band skip the event
 #undef SKIP_PAIR
 
 }  // namespace

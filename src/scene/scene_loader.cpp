@@ -336,10 +336,10 @@ void setup_fluorescence(Scene& scene, const std::string& mode) {
   }
   // Pigments nothing can excite cost nothing: no light shines in their
   // absorption band and (in full mode) no fluorescent pigment emits into it.
+  // (A pigment with Q = 0 or no emission is never fluorescent: read_medium.)
   if (s.skip_unneeded_work)
     for (auto& medium : scene.fluorescence)
       std::erase_if(medium, [&](const FluorescentPigment& fp) {
-        if (fp.quantum_yield == 0.f) return true;
         if (!fp.excitation.empty() && fp.excitation_possible()) return false;
         return s.fluorescence != FluorescenceMode::full || !absorbs_fluorescence(scene, fp);
       });
