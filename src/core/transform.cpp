@@ -105,8 +105,11 @@ Transform Transform::rotate(float degrees, const Vec3& axis) {
 
 Transform Transform::look_at(const Vec3& eye, const Vec3& target, const Vec3& up) {
   const Vec3 dir = normalize(target - eye);
+  if (!(length(up) > 0.f) || !is_finite(up)) throw std::domain_error("look_at: 'up' must be a non-zero, finite vector");
+  if (!is_finite(dir)) throw std::domain_error("look_at: the view direction is not finite (eye and target too far apart)");
+  // Nearly parallel vectors give a frame dominated by rounding: refuse below ~0.00006 degrees.
   const Vec3 c = cross(normalize(up), dir);
-  if (length(c) == 0.f) throw std::domain_error("look_at: 'up' is parallel to the view direction");
+  if (!(length(c) > 1e-6f)) throw std::domain_error("look_at: 'up' is parallel to the view direction");
   const Vec3 right = normalize(c);
   const Vec3 new_up = cross(dir, right);
   Mat m = identity();  // columns: right, up, dir, eye (camera looks down +z)

@@ -77,7 +77,19 @@ TriangleMesh load_mesh(const std::filesystem::path& file, MeshLoadInfo* info) {
   importer.SetPropertyInteger(AI_CONFIG_PP_SBP_REMOVE, aiPrimitiveType_POINT | aiPrimitiveType_LINE);
   const unsigned flags = aiProcess_Triangulate | aiProcess_JoinIdenticalVertices | aiProcess_PreTransformVertices |
                          aiProcess_SortByPType | aiProcess_ValidateDataStructure;
-  const aiScene* scene = importer.ReadFile(name, flags);
+  // Vertices are checked before post-processing: JoinIdenticalVertices silently
+  // merges a NaN vertex into another one, so the file's NaN would never be seen.
+  const aiScene* scene = importer.ReadFile(name, 0);
+  if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE))
+    throw InputError(name, "", "", fmt::format("cannot read mesh: {}", importer.GetErrorString()));
+  for (unsigned m = 0; m < scene->mNumMeshes; ++m)
+    for (unsigned v = 0; v < scene->mMeshes[m]->mNumVertices; ++v) {
+      const aiVector3D& p = scene->mMeshes[m]->mVertices[v];
+      if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z))
+        throw InputError(name, "", "",
+                         fmt::format("vertex {} of mesh {} has a non-finite coordinate ({}, {}, {})", v, m, p.x, p.y, p.z));
+    }
+  scene = importer.ApplyPostProcessing(flags);
   if (!scene || (scene->mFlags & AI_SCENE_FLAGS_INCOMPLETE))
     throw InputError(name, "", "", fmt::format("cannot read mesh: {}", importer.GetErrorString()));
 

@@ -1,6 +1,7 @@
 // The one translation unit that includes OpenVDB.
 #include "grids/vdb_file.h"
 
+#include <fstream>
 #include <mutex>
 
 #include <fmt/format.h>
@@ -17,10 +18,68 @@ void initialize_openvdb() {
   std::call_once(once, [] { openvdb::initialize(); });
 }
 
+// Walks the file's header, metadata and grid descriptors (OpenVDB's layout:
+// io/Archive.cc, io/GridDescriptor.cc) and refuses a file whose descriptors or
+// grids reach past its end. OpenVDB itself trusts the sizes it reads: a
+// truncated file makes it build strings of garbage length and loop or run out
+// of memory instead of throwing.
+void check_vdb_complete(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  const uint64_t size = std::filesystem::file_size(path);
+  const auto truncated = [&](const std::string& what) {
+    return InputError(path.string(), "", "", fmt::format("truncated or corrupt .vdb file ({}; the file has {} bytes)", what, size));
+  };
+  const auto read = [&](void* dst, size_t n, const char* what) {
+    if (!in.read(static_cast<char*>(dst), std::streamsize(n))) throw truncated(fmt::format("ends inside {}", what));
+  };
+  const auto skip = [&](uint64_t n, const char* what) {
+    const uint64_t at = uint64_t(in.tellg());
+    if (n > size - at) throw truncated(fmt::format("{} of {} bytes at offset {} runs past the end", what, n, at));
+    in.seekg(std::streamoff(at + n));
+  };
+  const auto skip_string = [&](const char* what) {
+    uint32_t n = 0;
+    read(&n, 4, what);
+    skip(n, what);
+  };
+  int64_t magic = 0;
+  uint32_t version = 0, library[2];
+  read(&magic, 8, "the header");
+  if (magic != int64_t(openvdb::OPENVDB_MAGIC)) return;  // not a .vdb: OpenVDB's own open() says so
+  read(&version, 4, "the header");
+  if (version < openvdb::OPENVDB_FILE_VERSION_BOOST_UUID) return;  // old layouts: left to OpenVDB
+  read(library, 8, "the header");
+  char has_offsets = 0;
+  read(&has_offsets, 1, "the header");
+  skip(36, "the file UUID");
+  if (!has_offsets) return;
+  int32_t count = 0;
+  read(&count, 4, "the file metadata");
+  for (int32_t i = 0; i < count; ++i) {
+    skip_string("a metadata name");
+    skip_string("a metadata type");
+    skip_string("a metadata value");
+  }
+  read(&count, 4, "the grid count");
+  if (count < 0) throw truncated(fmt::format("grid count {}", count));
+  for (int32_t g = 0; g < count; ++g) {
+    skip_string("a grid name");
+    skip_string("a grid type");
+    if (version >= openvdb::OPENVDB_FILE_VERSION_GRID_INSTANCING) skip_string("a grid's instance parent");
+    int64_t pos[3];  // grid, block, end
+    read(pos, sizeof(pos), "a grid descriptor");
+    const uint64_t at = uint64_t(in.tellg());
+    if (pos[2] < 0 || uint64_t(pos[2]) > size || uint64_t(pos[2]) < at)
+      throw truncated(fmt::format("grid {} ends at offset {}", g, pos[2]));
+    in.seekg(pos[2]);
+  }
+}
+
 std::unique_ptr<openvdb::io::File> open_vdb(const std::filesystem::path& path) {
   initialize_openvdb();
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec)) throw InputError(path.string(), "", "", "no such file");
+  check_vdb_complete(path);
   auto file = std::make_unique<openvdb::io::File>(path.string());
   try {
     file->open();
@@ -202,7 +261,12 @@ GridReport inspect_vdb(const std::filesystem::path& path) {
   GridReport report;
   report.file = path.string();
   for (auto it = file->beginName(); it != file->endName(); ++it) {
-    const openvdb::GridBase::Ptr grid = file->readGrid(*it);
+    openvdb::GridBase::Ptr grid;
+    try {
+      grid = file->readGrid(*it);
+    } catch (const openvdb::Exception& e) {
+      throw InputError(path.string(), *it, "", fmt::format("cannot read the grid ({})", e.what()));
+    }
     GridInfo info;
     info.name = *it;
     info.type = grid->valueType();

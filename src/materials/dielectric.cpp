@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include <fmt/format.h>
+
 namespace chlorovdb {
 
 float sellmeier_ior(const Sellmeier& s, float lambda_nm) {
@@ -9,6 +11,26 @@ float sellmeier_ior(const Sellmeier& s, float lambda_nm) {
   double n2 = 1.0;
   for (int i = 0; i < 3; ++i) n2 += s.B[i] * l2 / (l2 - s.C[i]);
   return float(std::sqrt(n2));
+}
+
+std::optional<std::string> sellmeier_problem(const Sellmeier& s, float lambda_min_nm, float lambda_max_nm) {
+  const double lo2 = double(lambda_min_nm) * lambda_min_nm * 1e-6, hi2 = double(lambda_max_nm) * lambda_max_nm * 1e-6;
+  for (int i = 0; i < 3; ++i) {
+    if (!std::isfinite(s.B[i]) || !std::isfinite(s.C[i])) return fmt::format("B[{}] and C[{}] must be finite", i, i);
+    if (s.B[i] != 0.f && s.C[i] >= lo2 && s.C[i] <= hi2)
+      return fmt::format("C[{}] = {:g} um^2 puts a pole of n at {:.1f} nm, inside the rendered spectrum [{:g}, {:g}] nm", i,
+                         s.C[i], std::sqrt(double(s.C[i])) * 1e3, lambda_min_nm, lambda_max_nm);
+  }
+  // Between poles n² is smooth: 1 nm steps find where it leaves the range.
+  for (float l = lambda_min_nm; l <= lambda_max_nm; l += 1.f) {
+    const double l2 = double(l) * l * 1e-6;
+    double n2 = 1.0;
+    for (int i = 0; i < 3; ++i) n2 += s.B[i] * l2 / (l2 - s.C[i]);
+    if (!(n2 >= 1e-6 && n2 <= 100.0))
+      return fmt::format("n^2 = {:.4g} at {:g} nm: the index must be real and in [0.001, 10] over [{:g}, {:g}] nm", n2, l,
+                         lambda_min_nm, lambda_max_nm);
+  }
+  return std::nullopt;
 }
 
 float ior_at(const Dielectric& d, float lambda_nm) {

@@ -6,6 +6,7 @@
 // refraction keeps only the hero wavelength (SampledWavelengths::terminate_secondary).
 #include <array>
 #include <optional>
+#include <string>
 #include <variant>
 
 #include "core/sampling.h"
@@ -25,6 +26,10 @@ struct Dielectric {
 };
 
 float sellmeier_ior(const Sellmeier& s, float lambda_nm);
+// Why `s` is not a usable IOR over [lambda_min_nm, lambda_max_nm]: a pole
+// (C_i = λ² inside the range) or n outside [1e-3, 10] (n² < 0 has no real
+// index) somewhere there, the same bounds as a constant "ior". nullopt if usable.
+std::optional<std::string> sellmeier_problem(const Sellmeier& s, float lambda_min_nm, float lambda_max_nm);
 float ior_at(const Dielectric& d, float lambda_nm);
 inline bool is_dispersive(const Dielectric& d) { return std::holds_alternative<Sellmeier>(d.ior); }
 

@@ -39,6 +39,20 @@ Spectrum read_emission(ParamReader& p, const Spectrum& epsilon, float quantum_yi
   }
 }
 
+// Largest concentration and scattering coefficient a field may reach. No solution
+// holds more than ~55 mol/L of anything (water itself), and a coefficient of
+// 1e12 /m is an optical depth of 1e6 per micrometre; beyond these the
+// coefficients overflow single precision or tracking in a grid never ends.
+constexpr double kMaxConcentrationMolar = 100.0;
+constexpr double kMaxCoefficientPerMetre = 1e12;
+
+void check_field_maximum(ParamReader& p, const std::string& key, double max_internal, bool concentration) {
+  const double limit = concentration ? kMaxConcentrationMolar : kMaxCoefficientPerMetre;
+  if (max_internal <= limit) return;
+  p.fail(key, concentration ? fmt::format("reaches {:.3g} mol/L (values x scale x unit); at most {:g} mol/L", max_internal, limit)
+                            : fmt::format("reaches {:.3g} /m (values x scale); at most {:g} /m", max_internal, limit));
+}
+
 // A concentration or coefficient: a number, or {"file", "name", "scale", "unit"}.
 Field read_field(ParamReader& p, const std::string& key, bool concentration, GridCache& grids, float unit) {
   const nlohmann::json& v = p.raw(key);
@@ -46,6 +60,7 @@ Field read_field(ParamReader& p, const std::string& key, bool concentration, Gri
     const float value = p.require_float(key, 0.f);
     const float to_internal =
         concentration ? molar_per_unit(p.get_string("unit", "uM"), p.file().string(), p.key_path("unit")) : 1.f;
+    check_field_maximum(p, key, double(value) * to_internal, concentration);
     return Field::constant(value * to_internal);
   }
   ParamReader g = p.child(key);
@@ -68,7 +83,9 @@ Field read_field(ParamReader& p, const std::string& key, bool concentration, Gri
     to_internal = molar_per_unit(unit, p.file().string(), g.key_path("unit"));
   }
   g.finish();
-  return Field::from_grid(grid, scale * grid->metadata().scale * to_internal);
+  const double factor = double(scale) * grid->metadata().scale * to_internal;
+  check_field_maximum(p, key, factor * grid->max_value(), concentration);
+  return Field::from_grid(grid, float(factor));
 }
 
 }  // namespace

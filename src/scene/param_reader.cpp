@@ -3,10 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
+#include <set>
 
 #include <fmt/format.h>
 
 #include "core/error.h"
+#include "core/number.h"
 
 namespace chlorovdb {
 
@@ -24,31 +26,124 @@ ParamReader::ParamReader(const nlohmann::json& object, std::filesystem::path fil
   if (!object.is_object()) fail("", fmt::format("expected an object, got {}", show(object)));
 }
 
+namespace {
+
+// Line and column of byte offset `byte` (1-based, as nlohmann reports it).
+std::string position(std::string_view text, size_t byte) {
+  size_t line = 1, col = 1;
+  for (size_t i = 0; i + 1 < byte && i < text.size(); ++i) {
+    if (text[i] == '\n') ++line, col = 1;
+    else ++col;
+  }
+  return fmt::format("{}:{}", line, col);
+}
+
+// A SAX pass before the document is built: refuses a key given twice in one
+// object (nlohmann would keep the last one silently) and nesting deeper than
+// kMaxJsonDepth (the DOM and every recursive walk over it would exhaust the
+// stack first). Records the key path of the offence for the message.
+class StructureCheck : public nlohmann::json_sax<nlohmann::json> {
+ public:
+  std::string problem, path, value;
+  std::optional<size_t> syntax_error_byte;
+  std::string syntax_error;
+
+  bool null() override { return scalar(); }
+  bool boolean(bool) override { return scalar(); }
+  bool number_integer(number_integer_t) override { return scalar(); }
+  bool number_unsigned(number_unsigned_t) override { return scalar(); }
+  bool number_float(number_float_t, const string_t&) override { return scalar(); }
+  bool string(string_t&) override { return scalar(); }
+  bool binary(binary_t&) override { return scalar(); }
+  bool start_object(std::size_t) override { return open(true); }
+  bool end_object() override { return close(); }
+  bool start_array(std::size_t) override { return open(false); }
+  bool end_array() override { return close(); }
+  bool key(string_t& k) override {
+    Level& l = levels_.back();
+    l.name = k;
+    if (!l.keys.insert(k).second) {
+      problem = "duplicate key: each key may appear once in an object (the earlier value would be silently ignored)";
+      path = current_path();
+      return false;
+    }
+    return true;
+  }
+  bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception& e) override {
+    syntax_error_byte = static_cast<const nlohmann::json::parse_error&>(e).byte;
+    syntax_error = e.what();
+    return false;
+  }
+
+ private:
+  struct Level {
+    bool object;
+    std::set<std::string> keys;
+    std::string name;  // current key (objects)
+    size_t index = 0;  // current element (arrays)
+  };
+  std::vector<Level> levels_;
+
+  std::string current_path() const {
+    std::string p;
+    for (const Level& l : levels_) {
+      if (l.object) p += (p.empty() ? "" : ".") + l.name;
+      else p += fmt::format("[{}]", l.index);
+    }
+    return p.empty() ? "(top level)" : p;
+  }
+  void element_done() {
+    if (!levels_.empty() && !levels_.back().object) ++levels_.back().index;
+  }
+  bool scalar() {
+    element_done();
+    return true;
+  }
+  bool open(bool object) {
+    if (levels_.size() >= ParamReader::kMaxJsonDepth) {
+      problem = fmt::format("nested deeper than {} levels", ParamReader::kMaxJsonDepth);
+      path = current_path();
+      return false;
+    }
+    levels_.push_back({object, {}, {}, 0});
+    return true;
+  }
+  bool close() {
+    levels_.pop_back();
+    element_done();
+    return true;
+  }
+};
+
+}  // namespace
+
+nlohmann::json ParamReader::parse_text(const std::string& text, const std::string& origin) {
+  StructureCheck check;
+  try {
+    const bool ok = nlohmann::json::sax_parse(text, &check, nlohmann::json::input_format_t::json, /*strict=*/true,
+                                              /*ignore_comments=*/true);
+    if (!ok && check.syntax_error_byte)
+      throw InputError(fmt::format("{}:{}", origin, position(text, *check.syntax_error_byte)), "", "",
+                       fmt::format("malformed JSON ({})", check.syntax_error));
+    if (!ok) throw InputError(origin, check.path, "", check.problem);
+    return nlohmann::json::parse(text, nullptr, true, /*ignore_comments=*/true);
+  } catch (const nlohmann::json::parse_error& e) {
+    throw InputError(fmt::format("{}:{}", origin, position(text, e.byte)), "", "", fmt::format("malformed JSON ({})", e.what()));
+  } catch (const nlohmann::json::exception& e) {
+    // e.g. out_of_range.406: a number beyond double range such as 1e400.
+    throw InputError(origin, "", "", fmt::format("unreadable JSON ({})", e.what()));
+  }
+}
+
 nlohmann::json ParamReader::parse_file(const std::filesystem::path& file) {
   // A device or pipe (/dev/zero) would be read forever: only regular files are scenes.
   std::error_code ec;
   if (std::filesystem::exists(file, ec) && !std::filesystem::is_regular_file(file, ec))
     throw InputError(file.string(), "", "", "not a regular file");
-  std::ifstream in(file);
+  std::ifstream in(file, std::ios::binary);
   if (!in) throw InputError(file.string(), "", "", "cannot open the scene file");
-  try {
-    return nlohmann::json::parse(in, nullptr, true, /*ignore_comments=*/true);
-  } catch (const nlohmann::json::parse_error& e) {
-    // e.byte is the offset; report line and column for humans.
-    in.clear();
-    in.seekg(0);
-    std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    size_t line = 1, col = 1;
-    for (size_t i = 0; i + 1 < e.byte && i < text.size(); ++i) {
-      if (text[i] == '\n') ++line, col = 1;
-      else ++col;
-    }
-    throw InputError(fmt::format("{}:{}:{}", file.string(), line, col), "", "",
-                     fmt::format("malformed JSON ({})", e.what()));
-  } catch (const nlohmann::json::exception& e) {
-    // e.g. out_of_range.406: a number beyond double range such as 1e400.
-    throw InputError(file.string(), "", "", fmt::format("unreadable JSON ({})", e.what()));
-  }
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  return parse_text(text, file.string());
 }
 
 std::string ParamReader::key_path(const std::string& key) const {
@@ -81,12 +176,8 @@ float ParamReader::require_float(const std::string& key, float lo, float hi) {
   const auto& v = raw(key);
   if (!v.is_number()) fail(key, "expected a number");
   const double d = v.get<double>();
-  if (!std::isfinite(d)) fail(key, "must be finite");
-  if (d < lo || d > hi) {
-    if (hi >= 3e38f) fail(key, fmt::format("must be >= {}", lo));
-    if (lo <= -3e38f) fail(key, fmt::format("must be <= {}", hi));
-    fail(key, fmt::format("must be in [{}, {}]", lo, hi));
-  }
+  if (const auto problem = range_problem(d, std::max<double>(lo, -kMaxFloatParam), std::min<double>(hi, kMaxFloatParam)))
+    fail(key, *problem);
   return float(d);
 }
 
@@ -94,13 +185,36 @@ float ParamReader::get_float(const std::string& key, float fallback, float lo, f
   return has(key) ? require_float(key, lo, hi) : fallback;
 }
 
+namespace {
+
+// A JSON integer as int64, or nullopt when it does not fit (unsigned beyond
+// INT64_MAX would wrap through get<long long>).
+std::optional<int64_t> json_int64(const nlohmann::json& v) {
+  if (v.is_number_unsigned()) {
+    const uint64_t u = v.get<uint64_t>();
+    if (u > uint64_t(INT64_MAX)) return std::nullopt;
+    return int64_t(u);
+  }
+  return v.get<int64_t>();
+}
+
+}  // namespace
+
 int ParamReader::get_int(const std::string& key, int fallback, int lo, int hi) {
   if (!has(key)) return fallback;
   const auto& v = value(key);
   if (!v.is_number_integer()) fail(key, "expected an integer");
-  const long long i = v.get<long long>();
-  if (i < lo || i > hi) fail(key, fmt::format("must be in [{}, {}]", lo, hi));
-  return int(i);
+  const std::optional<int64_t> i = json_int64(v);
+  if (!i || range_problem(double(*i), lo, hi)) fail(key, fmt::format("must be an integer in [{}, {}]", lo, hi));
+  return int(*i);
+}
+
+uint64_t ParamReader::get_uint64(const std::string& key, uint64_t fallback) {
+  if (!has(key)) return fallback;
+  const auto& v = value(key);
+  if (!v.is_number_integer() || (!v.is_number_unsigned() && v.get<int64_t>() < 0))
+    fail(key, fmt::format("expected an integer in [0, {}]", UINT64_MAX));
+  return v.get<uint64_t>();
 }
 
 bool ParamReader::get_bool(const std::string& key, bool fallback) {
@@ -136,9 +250,12 @@ std::vector<float> ParamReader::get_floats(const std::string& key, const std::ve
   const auto& v = value(key);
   if (!v.is_array()) fail(key, "expected an array of numbers");
   std::vector<float> out;
-  for (const auto& e : v) {
-    if (!e.is_number() || !std::isfinite(e.get<double>())) fail(key, "every element must be a finite number");
-    out.push_back(e.get<float>());
+  for (size_t i = 0; i < v.size(); ++i) {
+    if (!v[i].is_number()) fail(key, fmt::format("element {} is not a number", i));
+    const double d = v[i].get<double>();
+    if (const auto problem = range_problem(d, -kMaxFloatParam, kMaxFloatParam))
+      fail(key, fmt::format("element {} = {}: {}", i, show(v[i]), *problem));
+    out.push_back(float(d));
   }
   if (out.size() < min_count) fail(key, fmt::format("needs at least {} numbers", min_count));
   return out;

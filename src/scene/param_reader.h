@@ -2,6 +2,7 @@
 // Validating view on one JSON object of a scene file. Every getter records the
 // key as used; finish() rejects the keys nobody asked for, naming the nearest
 // valid one ("did you mean"). All errors carry file, key path and value.
+#include <cstdint>
 #include <filesystem>
 #include <optional>
 #include <string>
@@ -17,14 +18,21 @@ class ParamReader {
  public:
   ParamReader(const nlohmann::json& object, std::filesystem::path file, std::string key_path);
 
-  // Parse a whole file; malformed JSON is an InputError with line and column.
+  // Deepest nesting a scene may use (scenes need about 6 levels).
+  static constexpr size_t kMaxJsonDepth = 64;
+  // Parse a whole file; malformed JSON is an InputError with line and column,
+  // and so is a key repeated within one object or nesting beyond kMaxJsonDepth.
   static nlohmann::json parse_file(const std::filesystem::path& file);
+  // The same for JSON text from elsewhere; `origin` names it in errors.
+  static nlohmann::json parse_text(const std::string& text, const std::string& origin);
 
   bool has(const std::string& key) const;
 
   float get_float(const std::string& key, float fallback, float lo = -3e38f, float hi = 3e38f);
   float require_float(const std::string& key, float lo = -3e38f, float hi = 3e38f);
   int get_int(const std::string& key, int fallback, int lo = INT32_MIN, int hi = INT32_MAX);
+  // A non-negative integer up to 2^64 - 1 (seeds).
+  uint64_t get_uint64(const std::string& key, uint64_t fallback);
   bool get_bool(const std::string& key, bool fallback);
   std::string get_string(const std::string& key, const std::string& fallback);
   std::string require_string(const std::string& key);

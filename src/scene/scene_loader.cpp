@@ -7,6 +7,7 @@
 
 #include "core/error.h"
 #include "core/memory.h"
+#include "core/number.h"
 #include "fluorescence/emission_spectrum.h"
 #include "scene/medium_param.h"
 #include "scene/param_reader.h"
@@ -61,15 +62,15 @@ RenderSettings read_render_settings(ParamReader& top, const SceneOverrides& o, s
   RenderSettings s;
   if (auto r = top.optional_child("render")) {
     const auto res = r->get_floats("resolution", {512.f, 512.f}, 2);
-    if (res.size() != 2 || res[0] < 1 || res[1] < 1 || res[0] > 65536 || res[1] > 65536 ||
+    if (res.size() != 2 || res[0] < 1 || res[1] < 1 || res[0] > kMaxImageSide || res[1] > kMaxImageSide ||
         res[0] != std::floor(res[0]) || res[1] != std::floor(res[1]))
-      r->fail("resolution", "expected [width, height], whole numbers in [1, 65536]");
+      r->fail("resolution", fmt::format("expected [width, height], whole numbers in [1, {}]", kMaxImageSide));
     s.width = int(res[0]);
     s.height = int(res[1]);
-    s.spp = r->get_int("spp", s.spp, 1, 1 << 24);
+    s.spp = r->get_int("spp", s.spp, 1, kMaxSpp);
     s.max_depth = r->get_int("max_depth", s.max_depth, 0, 100000);
     s.wavelengths = r->get_int("wavelengths", s.wavelengths, 1, kMaxWavelengths);
-    s.seed = uint64_t(r->get_int("seed", 0, 0));
+    s.seed = r->get_uint64("seed", 0);
     s.color_space = r->get_enum("color_space", "srgb", {"srgb", "acescg"}) == "acescg" ? ColorSpace::ACEScg
                                                                                         : ColorSpace::sRGB;
     s.exposure = r->get_float("exposure", 0.f, -40.f, 40.f);
@@ -114,6 +115,9 @@ Camera read_camera(ParamReader& top, const RenderSettings& s, float unit) {
   const Vec3 target = c.require_vec3("look_at") * unit;
   const Vec3 up = c.get_vec3("up", {0, 1, 0});
   if (length(target - eye) == 0.f) c.fail("look_at", "must differ from \"position\"");
+  if (!std::isfinite(length(target - eye)))
+    c.fail("look_at", "is too far from \"position\" for single precision (their distance overflows)");
+  if (length(up) == 0.f) c.fail("up", "must not be the zero vector");
   Transform world_from_camera;
   try {
     world_from_camera = Transform::look_at(eye, target, up);
@@ -149,9 +153,11 @@ Material read_material(ParamReader& m) {
       ParamReader sm = ior.child("sellmeier");
       const auto B = sm.get_floats("B", {}, 3), C = sm.get_floats("C", {}, 3);
       if (B.size() != 3 || C.size() != 3) sm.fail("", "needs three B and three C coefficients");
+      d.ior = Sellmeier{{B[0], B[1], B[2]}, {C[0], C[1], C[2]}};
+      if (const auto problem = sellmeier_problem(std::get<Sellmeier>(d.ior), kLambdaMinUV, kLambdaMax))
+        sm.fail("", *problem);
       sm.finish();
       ior.finish();
-      d.ior = Sellmeier{{B[0], B[1], B[2]}, {C[0], C[1], C[2]}};
     } else {
       d.ior = m.get_float("ior", 1.5f, 1e-3f, 10.f);
     }
@@ -231,13 +237,15 @@ Light read_light(ParamReader& l, float unit) {
   } else if (type == "spot") {
     const Vec3 p = l.require_vec3("position") * unit;
     const Vec3 target = l.require_vec3("look_at") * unit;
+    if (!(length(target - p) > 0.f) || !std::isfinite(length(target - p)))
+      l.fail("look_at", "must differ from \"position\" (the spot light's axis points from position to look_at)");
     const float cone = l.get_float("cone_angle", 30.f, 1e-3f, 180.f);
     const float falloff = l.get_float("falloff_angle", 5.f, 0.f, cone);
     const float deg = kPi / 180.f;
     light = SpotLight{p, target - p, std::cos((cone - falloff) * deg), std::cos(cone * deg), spectrum, scale};
   } else if (type == "distant") {
     const Vec3 d = l.require_vec3("direction");
-    if (length(d) == 0.f) l.fail("direction", "must not be the zero vector");
+    if (!(length(d) > 0.f) || !std::isfinite(length(d))) l.fail("direction", "must be a non-zero, finite vector");
     light = DistantLight{normalize(d), spectrum, scale};
   } else {
     light = EnvironmentLight{spectrum, scale};
