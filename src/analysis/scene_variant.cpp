@@ -8,6 +8,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.h"
+#include "core/number.h"
 #include "scene/param_reader.h"
 
 namespace chlorovdb {
@@ -20,8 +21,11 @@ void apply_set(nlohmann::json& json, const std::string& set) {
   if (eq == std::string::npos || eq == 0)
     throw InputError("command line", "--set", set, "expected KEY=VALUE, e.g. render.skip_unneeded_work=false");
   const std::string key = set.substr(0, eq), text = set.substr(eq + 1);
-  nlohmann::json value = nlohmann::json::parse(text, nullptr, false);
-  if (value.is_discarded()) value = text;
+  // An array or object must be valid JSON (checked like a scene file: no
+  // duplicate keys, bounded nesting); any other word that is not JSON is a string.
+  nlohmann::json value;
+  if (!text.empty() && (text[0] == '[' || text[0] == '{')) value = ParamReader::parse_text(text, "command line: --set " + key);
+  else if (value = nlohmann::json::parse(text, nullptr, false); value.is_discarded()) value = text;
   nlohmann::json* node = &json;
   size_t start = 0;
   while (start <= key.size()) {
@@ -50,14 +54,15 @@ void apply_set(nlohmann::json& json, const std::string& set) {
 }  // namespace
 
 void parse_resolution(std::string_view text, SceneOverrides& o, std::string_view option) {
-  const std::string s(text);
-  int w = 0, h = 0;
-  char x = 0, extra = 0;
-  if (std::sscanf(s.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') || w < 1 || h < 1 ||
-      w > 65536 || h > 65536)
-    throw InputError("command line", option, s, "expected WxH with 1 <= W, H <= 65536, e.g. 640x480");
-  o.width = w;
-  o.height = h;
+  // Each side parsed whole and in int64, so "4294967312x12" cannot wrap to 16.
+  const size_t x = text.find_first_of("xX");
+  const std::optional<int64_t> w = x == std::string_view::npos ? std::nullopt : parse_int64(text.substr(0, x));
+  const std::optional<int64_t> h = x == std::string_view::npos ? std::nullopt : parse_int64(text.substr(x + 1));
+  if (!w || !h || *w < 1 || *h < 1 || *w > kMaxImageSide || *h > kMaxImageSide)
+    throw InputError("command line", option, text,
+                     fmt::format("expected WxH with 1 <= W, H <= {}, e.g. 640x480", kMaxImageSide));
+  o.width = int(*w);
+  o.height = int(*h);
 }
 
 Scene load_scene_variant(const std::filesystem::path& file, const SceneOverrides& overrides,

@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "core/error.h"
+#include "core/temp_file.h"
 
 namespace chlorovdb {
 
@@ -161,7 +162,7 @@ void write_checkpoint(const std::filesystem::path& file, const CheckpointHeader&
   if (film.width() != header.crop.width() || film.height() != header.crop.height())
     throw std::invalid_argument(fmt::format("write_checkpoint: film {}x{} but crop {}", film.width(), film.height(), to_string(header.crop)));
   const std::string text = header_json(header, film).dump();
-  const std::filesystem::path tmp = fmt::format("{}.{}.tmp", file.string(), ::getpid());
+  const std::filesystem::path tmp = temporary_beside(file);
   if (file.has_parent_path()) {
     std::error_code ec;
     std::filesystem::create_directories(file.parent_path(), ec);

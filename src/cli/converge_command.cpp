@@ -50,14 +50,14 @@ std::vector<T> parse_list(const std::string& text, const char* option) {
     size_t end = text.find(',', start);
     if (end == std::string::npos) end = text.size();
     const std::string item = text.substr(start, end - start);
-    try {
-      size_t used = 0;
-      const double v = std::stod(item, &used);
-      if (used != item.size() || !(v > 0)) throw std::invalid_argument(item);
-      values.push_back(T(v));
-    } catch (const std::exception&) {
-      throw InputError("command line", option, text, "expected a comma-separated list of positive numbers");
-    }
+    // Whole sample counts up to kMaxSpp, or finite positive seconds.
+    const std::optional<double> v = std::is_integral_v<T> ? std::optional<double>() : parse_finite_double(item);
+    const std::optional<int64_t> n = std::is_integral_v<T> ? parse_int64(item) : std::optional<int64_t>();
+    if (std::is_integral_v<T> ? !n || *n < 1 || *n > kMaxSpp : !v || !(*v > 0) || *v > 1e9)
+      throw InputError("command line", option, text,
+                       std::is_integral_v<T> ? fmt::format("expected a comma-separated list of whole numbers in [1, {}]", kMaxSpp)
+                                             : "expected a comma-separated list of positive numbers of seconds (at most 1e9)");
+    values.push_back(std::is_integral_v<T> ? T(*n) : T(*v));
     start = end + 1;
   }
   return values;
@@ -82,10 +82,10 @@ Command add_converge_command(CLI::App& app) {
   sub->add_option("--time-budgets", r.time_budgets, "Comma-separated rendering times in seconds");
   sub->add_option("--clock", r.clock, "What time budgets and efficiency count: wall (default) | cpu (process CPU time, robust on a shared machine)")
       ->check(CLI::IsMember({"wall", "cpu"}));
-  sub->add_option("--threads", r.threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 1024));
-  sub->add_option("--seed", r.seed, "Seed of the per-pixel random streams");
+  sub->add_option("--threads", r.threads, "Worker threads (default: all cores)")->check(Integer(1, kMaxThreads));
+  sub->add_option("--seed", r.seed, "Seed of the per-pixel random streams")->check(Unsigned64);
   sub->add_option("--resolution", r.resolution, "Image size WxH (must match the reference)");
-  sub->add_option("--wavelengths", r.wavelengths, "Wavelengths per camera path")->check(CLI::Range(1, 16));
+  sub->add_option("--wavelengths", r.wavelengths, "Wavelengths per camera path")->check(Integer(1, kMaxWavelengths));
   sub->add_option("--fluorescence", r.fluorescence, "auto | direct | full | reference | off");
   sub->add_option("--transmittance", r.transmittance, "auto | ratio | residual_ratio | delta");
   sub->add_option("--set", r.sets, "KEY=VALUE: change any scene key, e.g. render.skip_unneeded_work=false (repeatable)");

@@ -51,11 +51,12 @@ Command add_export_pbrt_command(CLI::App& app) {
   CLI::App* sub = app.add_subcommand("export-pbrt", "Write the scene in pbrt-v4's format (scenes without fluorescence)");
   sub->add_option("scene", r.scene, "Scene file")->required()->check(RegularFile);
   sub->add_option("-o,--output", r.output, "Output .pbrt (default: the scene's name in the current folder)");
-  sub->add_option("--spp", r.spp, "pbrt pixel samples (default: the scene's spp)")->check(CLI::Range(1, 1 << 24));
+  sub->add_option("--spp", r.spp, "pbrt pixel samples (default: the scene's spp)")->check(Integer(1, kMaxSpp));
   sub->add_option("--resolution", r.resolution, "Image size WxH");
   sub->add_flag("--ignore-fluorescence", r.ignore_fluorescence,
                 "Export fluorescent pigments as absorbers (compare with render --fluorescence off)");
-  sub->add_option("--max-grid-voxels", r.max_grid_voxels, "Refuse to dump grids with more voxels than this");
+  sub->add_option("--max-grid-voxels", r.max_grid_voxels, "Refuse to dump grids with more voxels than this")
+      ->check(Integer(1, INT64_MAX));
   return {sub, [args] { return export_pbrt_file(*args); }};
 }
 

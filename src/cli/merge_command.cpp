@@ -46,7 +46,7 @@ Command add_merge_command(CLI::App& app) {
       ->required()
       ->check(CLI::ExistingFile);
   sub->add_option("-o,--output", args->output, "Output EXR (a PNG preview is written beside it)")->required();
-  sub->add_option("--exposure", args->exposure, "PNG preview exposure in stops");
+  sub->add_option("--exposure", args->exposure, "PNG preview exposure in stops")->check(Real(-40, 40));
   return {sub, [args] { return merge(*args); }};
 }
 

@@ -72,14 +72,14 @@ Command add_reference_command(CLI::App& app) {
   CLI::App* sub = app.add_subcommand("reference", "Render a high-sample reference progressively, checkpointing; --resume continues it");
   sub->add_option("scene", r.scene, "Scene file")->required()->check(RegularFile);
   sub->add_option("-o,--output", r.output, "Output EXR (rewritten at every checkpoint)")->required();
-  sub->add_option("--spp", r.spp, "Total samples per pixel")->check(CLI::Range(1, 1 << 24));
+  sub->add_option("--spp", r.spp, "Total samples per pixel")->check(Integer(1, kMaxSpp));
   sub->add_option("--checkpoint-every", r.checkpoint_every, "Seconds between checkpoint writes (0: after every pass)")
-      ->check(CLI::Range(0.0, 1e9));
+      ->check(Real(0, 1e9));
   sub->add_flag("--resume", r.resume, "Continue from the samples already in the output EXR (metadata spp_done)");
-  sub->add_option("--threads", r.threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 1024));
-  sub->add_option("--seed", r.seed, "Seed of the per-pixel random streams");
+  sub->add_option("--threads", r.threads, "Worker threads (default: all cores)")->check(Integer(1, kMaxThreads));
+  sub->add_option("--seed", r.seed, "Seed of the per-pixel random streams")->check(Unsigned64);
   sub->add_option("--resolution", r.resolution, "Image size WxH");
-  sub->add_option("--wavelengths", r.wavelengths, "Wavelengths per camera path")->check(CLI::Range(1, 16));
+  sub->add_option("--wavelengths", r.wavelengths, "Wavelengths per camera path")->check(Integer(1, kMaxWavelengths));
   sub->add_option("--fluorescence", r.fluorescence, "auto | direct | full | reference | off");
   sub->add_option("--transmittance", r.transmittance, "auto | ratio | residual_ratio | delta");
   sub->add_option("--set", r.sets, "KEY=VALUE: change any scene key (repeatable)");

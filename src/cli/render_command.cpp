@@ -22,6 +22,7 @@
 
 #include "checkpoint/checkpoint.h"
 #include "checkpoint/partition.h"
+#include "analysis/scene_variant.h"
 #include "cli/commands.h"
 #include "core/error.h"
 #include "integrator/render.h"
@@ -43,16 +44,6 @@ Distribution g_dist;
 extern "C" void on_interrupt(int) {
   // A second Ctrl-C means "now": leave without writing.
   if (g_stop.exchange(true)) _exit(130);
-}
-
-void parse_resolution(const std::string& s, SceneOverrides& o) {
-  int w = 0, h = 0;
-  char x = 0, extra = 0;
-  if (std::sscanf(s.c_str(), "%d%c%d%c", &w, &x, &h, &extra) != 3 || (x != 'x' && x != 'X') || w < 1 || h < 1 ||
-      w > 65536 || h > 65536)
-    throw InputError("command line", "--resolution", s, "expected WxH with 1 <= W, H <= 65536, e.g. 640x480");
-  o.width = w;
-  o.height = h;
 }
 
 struct RenderArgs {
@@ -80,12 +71,12 @@ Command add_render_command(CLI::App& app) {
   CLI::App* sub = app.add_subcommand("render", "Render a scene to a linear EXR and a PNG preview");
   sub->add_option("scene", r.scene, "Scene file (JSON, docs/scene-format.md)")->required()->check(RegularFile);
   sub->add_option("-o,--output", r.output, "Output EXR (default: the scene's name in the current folder)");
-  auto* spp = sub->add_option("--spp", r.spp, "Samples per pixel")->check(CLI::Range(1, 1 << 24));
-  sub->add_option("--threads", r.threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 1024));
-  sub->add_option("--seed", r.seed, "Seed of the per-pixel random streams");
+  auto* spp = sub->add_option("--spp", r.spp, "Samples per pixel")->check(Integer(1, kMaxSpp));
+  sub->add_option("--threads", r.threads, "Worker threads (default: all cores)")->check(Integer(1, kMaxThreads));
+  sub->add_option("--seed", r.seed, "Seed of the per-pixel random streams")->check(Unsigned64);
   sub->add_option("--resolution", r.resolution, "Image size WxH, e.g. 640x480");
-  sub->add_option("--wavelengths", r.wavelengths, "Wavelengths per camera path")->check(CLI::Range(1, 16));
-  sub->add_option("--exposure", r.exposure, "PNG preview exposure in stops");
+  sub->add_option("--wavelengths", r.wavelengths, "Wavelengths per camera path")->check(Integer(1, kMaxWavelengths));
+  sub->add_option("--exposure", r.exposure, "PNG preview exposure in stops")->check(Real(-40, 40));
   sub->add_option("--fluorescence", r.fluorescence, "auto | direct | full | reference | off");
   sub->add_option("--transmittance", r.transmittance, "auto | ratio | residual_ratio | delta");
   sub->add_option("--crop", r.crop,
@@ -98,7 +89,7 @@ Command add_render_command(CLI::App& app) {
   auto* ckpt = sub->add_option("--checkpoint", r.checkpoint,
                                "Write the raw film sums (float64) to this file periodically, on Ctrl-C and at the end");
   sub->add_option("--checkpoint-every", r.checkpoint_every, "Seconds between checkpoints (0: after every pass; default 300)")
-      ->check(CLI::Range(0.0, 1e9))
+      ->check(Real(0, 1e9))
       ->needs(ckpt);
   sub->add_flag("--resume", r.resume,
                 "Continue from --checkpoint if it exists (start fresh if not); refused when the scene file, seed, size, "

@@ -11,6 +11,7 @@
 #include <stdexcept>
 
 #include "core/error.h"
+#include "core/temp_file.h"
 
 namespace chlorovdb {
 
@@ -21,13 +22,13 @@ constexpr std::string_view kMetadataPrefix = "chlorovdb:";
 constexpr const char* kLayerOrderAttribute = "chlorovdbLayers";
 constexpr const char* kSpectralLayer = "S0";  // emissive, unpolarised (Stokes S0) spectral channels
 
-// Writes through OIIO to "<path>.<pid>.tmp" and renames it over `path`: rename is atomic
+// Writes through OIIO to a temporary beside `path` (temporary_beside) and renames it over `path`: rename is atomic
 // within a file system, so readers see either the old file or the complete new one.
 // `write(out)` writes the pixels into the opened output and returns false on failure.
 template <typename WritePixels>
 void write_atomically(const std::filesystem::path& path, const char* format, const OIIO::ImageSpec& spec,
                       WritePixels&& write) {
-  const std::filesystem::path tmp = fmt::format("{}.{}.tmp", path.string(), ::getpid());
+  const std::filesystem::path tmp = temporary_beside(path);
   auto fail = [&](const std::string& why) {
     std::error_code ignored;
     std::filesystem::remove(tmp, ignored);

@@ -69,8 +69,8 @@ class StructureCheck : public nlohmann::json_sax<nlohmann::json> {
     }
     return true;
   }
-  bool parse_error(std::size_t, const std::string&, const nlohmann::detail::exception& e) override {
-    syntax_error_byte = static_cast<const nlohmann::json::parse_error&>(e).byte;
+  bool parse_error(std::size_t position, const std::string&, const nlohmann::detail::exception& e) override {
+    syntax_error_byte = position;  // e may be a parse_error or an out_of_range (a number beyond double: 1e400)
     syntax_error = e.what();
     return false;
   }

@@ -8,6 +8,7 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include "cli/options.h"
 #include "core/error.h"
 
 namespace chlorovdb::cli {
@@ -24,7 +25,7 @@ std::vector<float> parse_floats(const std::string& text, const char* flag, const
     const std::string token = text.substr(start, end - start);
     float v = 0.f;
     const auto [ptr, ec] = std::from_chars(token.data(), token.data() + token.size(), v);
-    if (token.empty() || ec != std::errc() || ptr != token.data() + token.size())
+    if (token.empty() || ec != std::errc() || ptr != token.data() + token.size() || !std::isfinite(v))
       throw InputError(kCommand, flag, text, expected);
     values.push_back(v);
     start = end + 1;
@@ -156,29 +157,30 @@ void add_voxelize_subcommand(CLI::App& app, VoxelizeArgs& a) {
   c->add_option("--mode", a.mode, "solid (closed mesh, filled) | shell (open/thin mesh) | spill (footprint or height field)")
       ->capture_default_str();
   c->add_option("--voxel-size", a.voxel_size, "Metres per voxel: V, or vx,vy,vz for non-cubic voxels")->required();
-  c->add_option("--thickness", a.thickness, "shell: full thickness in metres, centred on the surface");
-  c->add_option("--depth", a.depth, "spill: layer depth in metres (height field: multiplies the samples)");
+  c->add_option("--thickness", a.thickness, "shell: full thickness in metres, centred on the surface")->check(Real(-kMaxFloatParam, kMaxFloatParam));
+  c->add_option("--depth", a.depth, "spill: layer depth in metres (height field: multiplies the samples)")->check(Real(-kMaxFloatParam, kMaxFloatParam));
   c->add_option("--direction", a.direction, "spill: extrude along the footprint's normal or up (+y)")
       ->capture_default_str();
-  c->add_option("--cell-size", a.cell_size, "height field: metres between samples (default: the voxel size in x)");
-  c->add_option("--concentration", a.concentration, "C in --unit (uniform value, noise mean, falloff peak; default 1)");
+  c->add_option("--cell-size", a.cell_size, "height field: metres between samples (default: the voxel size in x)")->check(Real(-kMaxFloatParam, kMaxFloatParam));
+  c->add_option("--concentration", a.concentration, "C in --unit (uniform value, noise mean, falloff peak; default 1)")->check(Real(-kMaxFloatParam, kMaxFloatParam));
   c->add_option("--unit", a.unit, "Unit of the stored values: M, mM, uM (µM) or nM")->capture_default_str();
   c->add_option("--profile", a.profile, "uniform | linear | noise | falloff | grid")->capture_default_str();
   c->add_option("--gradient", a.gradient, "linear: C0,C1 at the low and high end of the body along --axis");
   c->add_option("--axis", a.axis, "linear: x | y | z")->capture_default_str();
-  c->add_option("--noise-seed", a.noise_seed, "noise: seed")->capture_default_str();
+  c->add_option("--noise-seed", a.noise_seed, "noise: seed")->check(Unsigned64)->capture_default_str();
   c->add_option("--noise-scale", a.noise_scale, "noise: feature size in metres (0: a quarter of the body's size)")
+      ->check(Real(0, kMaxFloatParam))
       ->capture_default_str();
-  c->add_option("--noise-amplitude", a.noise_amplitude, "noise: relative modulation in [0, 1]")->capture_default_str();
-  c->add_option("--noise-octaves", a.noise_octaves, "noise: octaves, 1..8")->capture_default_str();
-  c->add_option("--falloff-length", a.falloff_length, "falloff: length scale L in metres");
+  c->add_option("--noise-amplitude", a.noise_amplitude, "noise: relative modulation in [0, 1]")->check(Real(0, 1))->capture_default_str();
+  c->add_option("--noise-octaves", a.noise_octaves, "noise: octaves, 1..8")->check(Integer(1, 8))->capture_default_str();
+  c->add_option("--falloff-length", a.falloff_length, "falloff: length scale L in metres")->check(Real(-kMaxFloatParam, kMaxFloatParam));
   c->add_option("--falloff-shape", a.falloff_shape, "falloff: decay (C e^-d/L) | rise (C (1 - e^-d/L))")
       ->capture_default_str();
   c->add_option("--source-grid", a.source_grid, "grid: .vdb file to sample the concentration from");
   c->add_option("--source-grid-name", a.source_grid_name, "grid: name of the grid in --source-grid")
       ->capture_default_str();
   c->add_option("--grid-name", a.grid_name, "Name of the output grid")->capture_default_str();
-  c->add_option("--scale", a.scale, "Input units to metres (0.001 for a mesh in mm)")->capture_default_str();
+  c->add_option("--scale", a.scale, "Input units to metres (0.001 for a mesh in mm)")->check(Real(-kMaxFloatParam, kMaxFloatParam))->capture_default_str();
   c->add_option("--translate", a.translate, "x,y,z in metres, applied after --scale");
   c->add_flag("-q,--quiet", a.quiet, "Print nothing");
 }
