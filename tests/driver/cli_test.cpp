@@ -225,5 +225,88 @@ TEST(MergeCli, TwoSampleRangesAndTwoCropsMergeToTheSingleRun) {
   refused({"a.exr", "d.exr"}, "seed = 9: differs from");
 }
 
+// Every numeric option of every subcommand refuses words that do not fit its
+// type or range (CLI11 alone wrapped "-1" into a uint64 and let NaN through
+// Range), naming the option; nothing is rendered or written.
+TEST(NumericOptionsCli, OutOfRangeAndNonFiniteWordsAreRefused) {
+  const TestDir dir;
+  const std::string scene = scene_file(), out = (dir / "o.exr").string();
+  const std::vector<std::vector<std::string>> bad = {
+      {"render", scene, "-o", out, "--resolution", "4294967312x12"},
+      {"render", scene, "-o", out, "--resolution", "0x12"},
+      {"render", scene, "-o", out, "--resolution", "65537x12"},
+      {"render", scene, "-o", out, "--resolution", "12x12x"},
+      {"render", scene, "-o", out, "--seed", "-1"},
+      {"render", scene, "-o", out, "--seed", "18446744073709551616"},
+      {"render", scene, "-o", out, "--seed", "3.5"},
+      {"render", scene, "-o", out, "--exposure", "nan"},
+      {"render", scene, "-o", out, "--exposure", "inf"},
+      {"render", scene, "-o", out, "--exposure", "1e400"},
+      {"render", scene, "-o", out, "--exposure", "41"},
+      {"render", scene, "-o", out, "--checkpoint", (dir / "c.ckpt").string(), "--checkpoint-every", "nan"},
+      {"render", scene, "-o", out, "--checkpoint", (dir / "c.ckpt").string(), "--checkpoint-every", "-1"},
+      {"render", scene, "-o", out, "--spp", "4294967297"},
+      {"render", scene, "-o", out, "--spp", "0"},
+      {"render", scene, "-o", out, "--threads", "1e3"},
+      {"render", scene, "-o", out, "--wavelengths", "17"},
+      {"reference", scene, "-o", out, "--seed", "-1"},
+      {"reference", scene, "-o", out, "--checkpoint-every", "inf"},
+      {"reference", scene, "-o", out, "--resolution", "4294967312x12"},
+      {"converge", scene, "--reference", scene, "-o", (dir / "c").string(), "--seed", "18446744073709551616"},
+      {"converge", scene, "--reference", scene, "-o", (dir / "c").string(), "--threads", "0"},
+      {"export-pbrt", scene, "-o", (dir / "s.pbrt").string(), "--max-grid-voxels", "-5"},
+      {"export-pbrt", scene, "-o", (dir / "s.pbrt").string(), "--resolution", "-3x4"},
+      {"merge", scene, "-o", out, "--exposure", "nan"},
+      {"voxelize", scene, "-o", (dir / "v.vdb").string(), "--voxel-size", "0.1", "--concentration", "inf"},
+      {"voxelize", scene, "-o", (dir / "v.vdb").string(), "--voxel-size", "0.1", "--noise-seed", "-1"},
+      {"voxelize", scene, "-o", (dir / "v.vdb").string(), "--voxel-size", "0.1", "--scale", "1e39"},
+  };
+  for (const auto& args : bad) {
+    std::vector<std::string> full = {kExe};
+    full.insert(full.end(), args.begin(), args.end());
+    std::string line;
+    for (const auto& a : args) line += a + " ";
+    const auto r = run(full, dir / "bad.log");
+    EXPECT_TRUE(r.status == 1 || r.status == 105 || r.status == 106) << line << "-> " << r.status << "\n" << r.output;
+    // The message names the offending word (or option).
+    EXPECT_NE(r.output.find(args.back()), std::string::npos) << line << "\n" << r.output;
+  }
+  EXPECT_FALSE(std::filesystem::exists(out));
+  // The largest seed is a seed.
+  const auto ok = run(render_args(dir / "max_seed.exr", {"--spp", "1"}, "18446744073709551615"), dir / "ok.log");
+  EXPECT_EQ(ok.status, 0) << ok.output;
+}
+
+// Two renders writing the same output at once never leave a torn file: each
+// writes a temporary of its own beside it and renames it into place.
+TEST(AtomicOutputCli, ConcurrentRendersToOnePathLeaveAWholeImage) {
+  const TestDir dir;
+  const auto out = dir / "same.exr";
+  std::vector<Child> children;
+  for (int i = 0; i < 3; ++i)
+    children.push_back(spawn(render_args(out, {"--spp", "2", "--threads", "1"}), dir / ("w" + std::to_string(i) + ".log")));
+  for (const Child& c : children) EXPECT_EQ(wait_for(c), 0);
+  const auto single = run(render_args(dir / "single.exr", {"--spp", "2", "--threads", "1"}), dir / "single.log");
+  ASSERT_EQ(single.status, 0) << single.output;
+  expect_same_pixels(read_exr(out), read_exr(dir / "single.exr"));
+  for (const auto& e : std::filesystem::directory_iterator(dir / "."))
+    EXPECT_EQ(e.path().string().find(".tmp"), std::string::npos) << "left behind: " << e.path();
+}
+
+// `chlorovdb info` on a cut .vdb refuses it, naming the file, where it used to
+// build strings of garbage length until it was killed.
+TEST(InfoCli, TruncatedVdbIsRefused) {
+  const TestDir dir;
+  const auto whole = std::filesystem::path(CHLOROVDB_SOURCE_DIR) / "volumes/spill_1uM.vdb";
+  const std::string bytes = read_text(whole);
+  for (const size_t keep : {size_t(100), size_t(600), bytes.size() / 2}) {
+    const auto cut = dir / "cut.vdb";
+    std::ofstream(cut, std::ios::binary) << bytes.substr(0, keep);
+    const auto r = run({kExe, "info", cut.string()}, dir / "info.log");
+    EXPECT_EQ(r.status, 1) << keep << "\n" << r.output;
+    EXPECT_NE(r.output.find("cut.vdb"), std::string::npos) << r.output;
+  }
+}
+
 }  // namespace
 }  // namespace chlorovdb::test

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
 #include <filesystem>
 #include <fstream>
 #include <string>
@@ -236,6 +237,34 @@ TEST(MeshLoad, NanCoordinateIsRejected) {
   const TempFile file("nan.obj", "v 0 0 0\nv nan 0 0\nv 0 1 0\nf 1 2 3\n");
   const std::string msg = expect_input_error(file.path());
   EXPECT_NE(msg.find(file.path().string()), std::string::npos) << msg;
+}
+
+// A binary PLY tetrahedron whose vertex 2 is `bad` in y. Assimp's vertex joining
+// used to merge a NaN vertex into another one, so the NaN was never seen.
+std::string binary_ply_tetrahedron(float bad) {
+  const float v[4][3] = {{0, 0, 0}, {1, 0, 0}, {0, bad, 0}, {0, 0, 1}};
+  const int f[4][3] = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  std::string s =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+      "element face 4\nproperty list uchar int vertex_indices\nend_header\n";
+  s.append(reinterpret_cast<const char*>(v), sizeof(v));
+  for (const auto& face : f) {
+    s.push_back(char(3));
+    s.append(reinterpret_cast<const char*>(face), sizeof(face));
+  }
+  return s;
+}
+
+TEST(MeshLoad, BinaryPlyWithNanOrInfVertexIsRejected) {
+  const TempFile good("good.ply", binary_ply_tetrahedron(1.f));
+  EXPECT_EQ(load_mesh(good.path()).positions.size(), 4u);
+  for (const float bad : {std::nanf(""), INFINITY, -INFINITY}) {
+    const TempFile file("nan.ply", binary_ply_tetrahedron(bad));
+    const std::string msg = expect_input_error(file.path());
+    EXPECT_NE(msg.find(file.path().string()), std::string::npos) << msg;
+    EXPECT_NE(msg.find("vertex 2"), std::string::npos) << msg;
+    EXPECT_NE(msg.find("non-finite"), std::string::npos) << msg;
+  }
 }
 
 TEST(MeshLoad, AllDegenerateIsRejected) {

@@ -7,6 +7,8 @@
 #include <cstring>
 #include <filesystem>
 #include <limits>
+#include <thread>
+#include <atomic>
 
 #include "core/error.h"
 #include "io/image.h"
@@ -161,4 +163,43 @@ TEST(Png, UnwritablePathIsNamed) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("/nonexistent-dir/preview.png"), std::string::npos) << e.what();
   }
+}
+
+// Threads of one process writing one path at once (as two renders of a
+// library caller would): each write has its own temporary, so a reader only
+// ever sees a whole image, and no temporary is left behind.
+TEST(ExrWrite, ConcurrentWritersInOneProcessNeverTearTheFile) {
+  const auto dir = temp_path("concurrent");
+  std::filesystem::remove_all(dir);
+  std::filesystem::create_directories(dir);
+  const auto path = dir / "same.exr";
+  Image a = make_image(), b = make_image();
+  for (float& v : b.layers[0].pixels) v += 100.f;
+  write_exr(path, a);
+  std::atomic<bool> done{false};
+  std::atomic<int> torn{0};
+  std::thread reader([&] {
+    while (!done) {
+      try {
+        const Image r = read_exr(path);
+        const float first = r.layers.at(0).pixels.at(0);
+        if (first != a.layers[0].pixels[0] && first != b.layers[0].pixels[0]) ++torn;
+      } catch (const std::exception&) {
+        ++torn;  // unreadable: torn or missing
+      }
+    }
+  });
+  std::vector<std::thread> writers;
+  for (const Image* img : {&a, &b})
+    writers.emplace_back([&, img] {
+      for (int i = 0; i < 40; ++i) write_exr(path, *img);
+    });
+  for (auto& w : writers) w.join();
+  done = true;
+  reader.join();
+  EXPECT_EQ(torn, 0);
+  int files = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) ++files, EXPECT_EQ(e.path(), path);
+  EXPECT_EQ(files, 1);
+  std::filesystem::remove_all(dir);
 }
