@@ -128,6 +128,7 @@ VoxelGrid load_concentration_grid(const std::filesystem::path& path, std::string
   meta.name = name;
   meta.file = file_name;
   meta.unit = meta_or<std::string>(*grid, "unit", "");
+  meta.length_unit = meta_or<std::string>(*grid, "length_unit", "");
   meta.scale = meta_or<float>(*grid, "scale", float(meta_or<double>(*grid, "scale", 1.0)));
   meta.provenance = meta_or<std::string>(*grid, "provenance", "");
 
@@ -184,6 +185,8 @@ void write_concentration_grids(const std::filesystem::path& path, std::span<cons
     grid->tree().prune();
     if (!d.metadata.unit.empty()) grid->insertMeta("unit", openvdb::StringMetadata(d.metadata.unit));
     grid->insertMeta("scale", openvdb::FloatMetadata(d.metadata.scale));
+    if (!d.metadata.length_unit.empty())
+      grid->insertMeta("length_unit", openvdb::StringMetadata(d.metadata.length_unit));
     if (!d.metadata.provenance.empty())
       grid->insertMeta("provenance", openvdb::StringMetadata(d.metadata.provenance));
     out.push_back(grid);

@@ -29,12 +29,13 @@ enum class Interpolation { trilinear, nearest };
 using Coord = std::array<int, 3>;
 
 // Where a grid came from and what its values mean (the .vdb metadata "unit",
-// "scale" and "provenance" that write_concentration_grid stores).
+// "scale", "length_unit" and "provenance" that write_concentration_grid stores).
 struct GridMetadata {
   std::string name;        // grid name in the file
   std::string file;        // source path; empty for grids built in memory
   std::string unit;        // unit of value * scale, e.g. "uM"; empty when the file does not say
   float scale = 1.f;       // stored value * scale = quantity in `unit`
+  std::string length_unit; // unit of the index-to-world transform ("m", "cm", ...); empty = metres
   std::string provenance;  // free text: who made the grid and how
   int64_t clamped_voxels = 0;  // NaN / Inf / negative values clamped to 0 (clamp_invalid)
 };
@@ -45,7 +46,7 @@ struct DenseGrid {
   Coord dims{0, 0, 0};            // voxels per axis
   Coord origin{0, 0, 0};          // index of the first voxel
   std::vector<float> values;      // values[x + dims[0] * (y + dims[1] * z)], x fastest, relative to origin
-  Transform world_from_index;     // voxel centre (i,j,k) -> world (metres)
+  Transform world_from_index;     // voxel centre (i,j,k) -> world (metadata.length_unit, metres by default)
   float background = 0.f;         // value everywhere outside the box
   GridMetadata metadata;          // name, unit, scale, provenance
 
