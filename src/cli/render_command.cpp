@@ -230,6 +230,8 @@ int render(const RenderArgs& a) {
 
   if (root)
     for (const std::string& w : scene.warnings) fmt::print(stderr, "warning: {}\n", w);
+  if (root)
+    for (const std::string& n : scene.notes) fmt::print(stderr, "note: {}\n", n);
   if (root && scene.has_fluorescence())
     fmt::print(stderr, "fluorescence: {} ({})\n", to_string(s.fluorescence), s.fluorescence_reason);
 

@@ -26,6 +26,13 @@ namespace chlorovdb {
 
 enum class Interpolation { trilinear, nearest };
 
+// How far past the centres of the outermost stored voxels a lookup can still
+// differ from the background, in voxels: a nearest lookup reads a voxel over
+// its cell (half a voxel each side), a trilinear one fades it out over one voxel.
+inline float support_radius(Interpolation interpolation) {
+  return interpolation == Interpolation::trilinear ? 1.f : 0.5f;
+}
+
 using Coord = std::array<int, 3>;
 
 // Where a grid came from and what its values mean (the .vdb metadata "unit",
@@ -37,6 +44,7 @@ struct GridMetadata {
   float scale = 1.f;       // stored value * scale = quantity in `unit`
   std::string length_unit; // unit of the index-to-world transform ("m", "cm", ...); empty = metres
   std::string provenance;  // free text: who made the grid and how
+  std::string converted_from;  // value type of the file's grid when it was not float ("double"), else empty
   int64_t clamped_voxels = 0;  // NaN / Inf / negative values clamped to 0 (clamp_invalid)
 };
 
@@ -111,10 +119,11 @@ class VoxelGrid {
   // Voxels that may differ from the background (inclusive).
   Coord index_lo() const { return index_lo_; }
   Coord index_hi() const { return index_hi_; }
-  // Continuous index-space box the voxels cover: [lo - 1/2, hi + 1/2].
-  Bounds3 index_bounds() const;
-  // Axis-aligned world box around index_bounds().
-  Bounds3 world_bounds() const;
+  // Continuous index-space box outside which every lookup of this interpolation
+  // returns the background: [lo - r, hi + r] with r = support_radius(interpolation).
+  Bounds3 index_bounds(Interpolation interpolation) const;
+  // Axis-aligned world box around index_bounds(interpolation).
+  Bounds3 world_bounds(Interpolation interpolation) const;
   float background() const { return background_; }
   float min_value() const { return min_value_; }  // over stored voxels and background
   float max_value() const { return max_value_; }

@@ -373,6 +373,11 @@ Scene load_scene(const std::filesystem::path& file, const SceneOverrides& overri
     scene.fluorescence.push_back(std::move(def.fluorescent));
   }
 
+  for (const auto& [key, grid] : grids)
+    if (!grid->metadata().converted_from.empty())
+      scene.notes.push_back(fmt::format("{}: grid {} holds {} values: converted to float on load",
+                                        grid->metadata().file, grid->metadata().name, grid->metadata().converted_from));
+
   NameTable materials;
   for (auto& [name, m] : top.children_map("materials")) {
     materials.add(name, int(scene.materials.size()));
