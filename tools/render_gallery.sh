@@ -7,11 +7,14 @@
 #
 # --md-only rewrites docs/gallery.md from the recorded times (out/gallery/times.tsv) without rendering.
 # Defaults: build-scenes/src/cli/chlorovdb (else build/src/cli/chlorovdb), 2 threads, every scene in
-# the list below. Naming scenes re-renders only those and keeps the other entries of docs/gallery.md.
+# the list below. Naming scenes re-renders only those and keeps the other entries of docs/gallery.md
+# (rendered at older commits); the full run, with no names, is the one to publish.
 # Meshes and volumes are regenerated first if missing (tools/make_meshes.py, tools/make_volumes.sh).
 # EXRs go to out/gallery/ (not committed). Times: wall clock of the whole `chlorovdb render` process
 # and its CPU time (user + sys); the machine's load average is recorded with them, since other work on
 # the machine stretches the wall time (CPU time / threads is what an idle machine would take).
+# Non-interactive; stops at the first failed render. A render's warnings (e.g. a grid's length unit)
+# are repeated on stderr. The doc records the commit (marked -dirty with uncommitted changes).
 set -euo pipefail
 root=$(cd "$(dirname "$0")/.." && pwd)
 cd "$root"
@@ -71,6 +74,8 @@ want() {
 mkdir -p docs/gallery out/gallery
 times=out/gallery/times.tsv   # scene, spp, resolution, wall s, cpu s, load average; kept between runs
 touch "$times"
+# A full run renders every scene at this commit: no times survive from an older one.
+[ ${#only[@]} -eq 0 ] && [ "$md_only" = 0 ] && : > "$times"
 
 while IFS='|' read -r name fig caption; do
   [ -n "$name" ] || continue
@@ -86,6 +91,7 @@ while IFS='|' read -r name fig caption; do
   end=$(date +%s.%N)
   wall=$(echo "$start $end" | awk '{printf "%.1f", $2 - $1}')
   cpu=$(awk '{printf "%.1f", $1 + $2}' out/gallery/cpu.txt)
+  grep '^warning:' "out/gallery/$name.log" | sed "s|^|$name: |" >&2 || true
   cp "out/gallery/$name.png" "docs/gallery/$name.png"
   meta=$(iinfo -v "out/gallery/$name.exr" 2>/dev/null || true)
   spp=$(echo "$meta" | sed -n 's/^ *chlorovdb:spp: *//p' | head -1)
@@ -113,7 +119,10 @@ done <<< "$scenes"
   echo "load average given per image; with other work running, each render gets a fraction of the 2 cores); CPU time"
   echo "/ $threads is what an idle 2-core machine takes."
   echo
-  echo "Commit: \`$(git rev-parse --short HEAD)\`, binary: \`$bin\`, $(date -u +%Y-%m-%d)."
+  commit=$(git rev-parse --short HEAD)
+  git diff --quiet HEAD -- src scenes spectra volumes meshes 2>/dev/null || commit="$commit-dirty"
+  total=$(awk -F'\t' '{w += $4; c += $5} END {printf "%.0f s wall, %.0f s CPU", w, c}' "$times")
+  echo "Commit: \`$commit\`, binary: \`$bin\`, $(date -u '+%Y-%m-%d %H:%M UTC'). All renders: $total."
   echo
   while IFS='|' read -r name fig caption; do
     [ -n "$name" ] || continue

@@ -15,7 +15,11 @@ int info(const std::filesystem::path& vdb_file) {
   int warnings = 0;
   for (const GridInfo& g : report.grids) {
     fmt::print("\n{} ({}, {})\n", g.name, g.type, g.grid_class);
-    fmt::print("  voxel size      {:.6g} x {:.6g} x {:.6g} m{}\n", g.voxel_size.x, g.voxel_size.y, g.voxel_size.z,
+    // Lengths are in the grid's own unit: its length_unit metadata, metres by default.
+    std::string u = "m";
+    for (const auto& [key, value] : g.metadata)
+      if (key == "length_unit") u = value;
+    fmt::print("  voxel size      {:.6g} x {:.6g} x {:.6g} {}{}\n", g.voxel_size.x, g.voxel_size.y, g.voxel_size.z, u,
                g.linear_transform ? "" : " (non-linear transform: not usable as a medium)");
     const auto& m = g.world_from_index;
     fmt::print("  world_from_index [{:.6g} {:.6g} {:.6g} {:.6g}; {:.6g} {:.6g} {:.6g} {:.6g}; {:.6g} {:.6g} {:.6g} {:.6g}]\n",
@@ -26,9 +30,21 @@ int info(const std::filesystem::path& vdb_file) {
       fmt::print("  active voxels   {} in index [{}, {}, {}]..[{}, {}, {}]\n", g.active_voxels, lo[0], lo[1], lo[2],
                  hi[0], hi[1], hi[2]);
       const Bounds3& w = g.active_world_bounds;
-      fmt::print("  world bounds    [{:.6g}, {:.6g}, {:.6g}]..[{:.6g}, {:.6g}, {:.6g}] m\n", w.lo.x, w.lo.y, w.lo.z,
-                 w.hi.x, w.hi.y, w.hi.z);
-    } else {
+      fmt::print("  world bounds    [{:.6g}, {:.6g}, {:.6g}]..[{:.6g}, {:.6g}, {:.6g}] {} (active voxels' cells)\n",
+                 w.lo.x, w.lo.y, w.lo.z, w.hi.x, w.hi.y, w.hi.z, u);
+    }
+    if (g.stored_index_bounds) {
+      const auto& [lo, hi] = *g.stored_index_bounds;
+      fmt::print("  stored voxels   index [{}, {}, {}]..[{}, {}, {}] (active and leaf voxels: what the renderer loads)\n",
+                 lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]);
+      for (const Interpolation i : {Interpolation::nearest, Interpolation::trilinear}) {
+        const Bounds3& w = g.medium_world_bounds[int(i)];
+        fmt::print("  medium box      [{:.6g}, {:.6g}, {:.6g}]..[{:.6g}, {:.6g}, {:.6g}] {} ({}: where rendering sees the grid)\n",
+                   w.lo.x, w.lo.y, w.lo.z, w.hi.x, w.hi.y, w.hi.z, u,
+                   i == Interpolation::trilinear ? "trilinear" : "nearest");
+      }
+    }
+    if (!g.active_index_bounds) {
       fmt::print("  active voxels   0 (empty grid)\n");
     }
     if (g.value_range) fmt::print("  value range     [{:.6g}, {:.6g}]\n", g.value_range->first, g.value_range->second);

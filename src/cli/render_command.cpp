@@ -219,6 +219,10 @@ int render(const RenderArgs& a) {
                dist.size > 1 ? fmt::format("rank {}: ", dist.rank) : "", ckpt.string());
   }
 
+  if (root)
+    for (const std::string& w : scene.warnings) fmt::print(stderr, "warning: {}\n", w);
+  if (root)
+    for (const std::string& n : scene.notes) fmt::print(stderr, "note: {}\n", n);
   if (root && scene.has_fluorescence())
     fmt::print(stderr, "fluorescence: {} ({})\n", to_string(s.fluorescence), s.fluorescence_reason);
 

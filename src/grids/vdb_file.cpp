@@ -111,17 +111,35 @@ T meta_or(const openvdb::GridBase& grid, const std::string& key, T fallback) {
   return fallback;
 }
 
-// World box around the cells of voxels [lo, hi] (the map may be singular here: no inverse needed).
-Bounds3 world_box(const Transform::Mat& m, Coord lo, Coord hi) {
+// World box around voxels [lo, hi] grown by r voxels (the map may be singular here: no inverse needed).
+Bounds3 world_box(const Transform::Mat& m, Coord lo, Coord hi, float r) {
   Bounds3 b;
   for (int c = 0; c < 8; ++c) {
-    const Vec3 p{c & 1 ? hi[0] + 0.5f : lo[0] - 0.5f, c & 2 ? hi[1] + 0.5f : lo[1] - 0.5f,
-                 c & 4 ? hi[2] + 0.5f : lo[2] - 0.5f};
+    const Vec3 p{c & 1 ? hi[0] + r : lo[0] - r, c & 2 ? hi[1] + r : lo[1] - r, c & 4 ? hi[2] + r : lo[2] - r};
     Vec3 q;
     for (int i = 0; i < 3; ++i) q[i] = m[i][0] * p.x + m[i][1] * p.y + m[i][2] * p.z + m[i][3];
     b.extend(q);
   }
   return b;
+}
+
+// Every voxel a lookup can see differ from the background: active voxels and
+// tiles, and the inactive voxels that leaf nodes store.
+std::optional<std::pair<Coord, Coord>> stored_voxels(const openvdb::GridBase& grid) {
+  openvdb::CoordBBox box = grid.evalActiveVoxelBoundingBox();
+  openvdb::CoordBBox leaves;
+  if (grid.baseTree().evalLeafBoundingBox(leaves)) box.expand(leaves);
+  if (box.empty()) return std::nullopt;
+  return std::pair(Coord{box.min().x(), box.min().y(), box.min().z()}, Coord{box.max().x(), box.max().y(), box.max().z()});
+}
+
+// A float copy of a double grid (values rounded to float; transform and metadata kept).
+openvdb::FloatGrid::Ptr to_float_grid(const openvdb::DoubleGrid& grid) {
+  auto tree = std::make_shared<openvdb::FloatTree>(grid.tree());  // OpenVDB's converting copy: static_cast per value
+  openvdb::FloatGrid::Ptr out = openvdb::FloatGrid::create(tree);
+  static_cast<openvdb::MetaMap&>(*out) = static_cast<const openvdb::MetaMap&>(grid);
+  out->setTransform(grid.transform().copy());
+  return out;
 }
 
 template <typename GridT>
@@ -160,10 +178,18 @@ VoxelGrid load_concentration_grid(const std::filesystem::path& path, std::string
     throw InputError(file_name, "grid", name, problem);
   }
   const openvdb::GridBase::Ptr base = file->readGrid(name);
-  const openvdb::FloatGrid::ConstPtr grid = openvdb::gridConstPtrCast<openvdb::FloatGrid>(base);
-  if (!grid)
-    throw InputError(file_name, "grid", name,
-                     fmt::format("is a {} grid; a concentration grid must hold float values", base->valueType()));
+  openvdb::FloatGrid::ConstPtr grid = openvdb::gridConstPtrCast<openvdb::FloatGrid>(base);
+  std::string converted_from;
+  if (!grid) {
+    if (const auto d = openvdb::gridConstPtrCast<openvdb::DoubleGrid>(base)) {
+      grid = to_float_grid(*d);
+      converted_from = "double";
+    } else {
+      throw InputError(file_name, "grid", name,
+                       fmt::format("is a {} grid; a concentration grid must hold float or double values",
+                                   base->valueType()));
+    }
+  }
   if (!grid->transform().isLinear())
     throw InputError(file_name, "grid", name,
                      "has a non-linear (frustum) transform; only affine index-to-world maps are supported");
@@ -174,21 +200,18 @@ VoxelGrid load_concentration_grid(const std::filesystem::path& path, std::string
     throw InputError(file_name, "grid", name, "has a singular index-to-world transform");
   }
 
-  // Every voxel a lookup can see differ from the background: active voxels and
-  // tiles, and the inactive voxels that leaf nodes store.
-  openvdb::CoordBBox box = grid->evalActiveVoxelBoundingBox();
-  openvdb::CoordBBox leaves;
-  if (grid->tree().evalLeafBoundingBox(leaves)) box.expand(leaves);
-  const bool empty = box.empty();
-  const Coord lo = empty ? Coord{0, 0, 0} : Coord{box.min().x(), box.min().y(), box.min().z()};
-  const Coord hi = empty ? Coord{-1, -1, -1} : Coord{box.max().x(), box.max().y(), box.max().z()};
+  const auto stored = stored_voxels(*grid);
+  const Coord lo = stored ? stored->first : Coord{0, 0, 0};
+  const Coord hi = stored ? stored->second : Coord{-1, -1, -1};
 
   GridMetadata meta;
   meta.name = name;
   meta.file = file_name;
   meta.unit = meta_or<std::string>(*grid, "unit", "");
+  meta.length_unit = meta_or<std::string>(*grid, "length_unit", "");
   meta.scale = meta_or<float>(*grid, "scale", float(meta_or<double>(*grid, "scale", 1.0)));
   meta.provenance = meta_or<std::string>(*grid, "provenance", "");
+  meta.converted_from = converted_from;
 
   const openvdb::FloatTree& tree = grid->tree();
   // Unregistered accessors: the tree outlives them and is not modified meanwhile.
@@ -243,6 +266,8 @@ void write_concentration_grids(const std::filesystem::path& path, std::span<cons
     grid->tree().prune();
     if (!d.metadata.unit.empty()) grid->insertMeta("unit", openvdb::StringMetadata(d.metadata.unit));
     grid->insertMeta("scale", openvdb::FloatMetadata(d.metadata.scale));
+    if (!d.metadata.length_unit.empty())
+      grid->insertMeta("length_unit", openvdb::StringMetadata(d.metadata.length_unit));
     if (!d.metadata.provenance.empty())
       grid->insertMeta("provenance", openvdb::StringMetadata(d.metadata.provenance));
     out.push_back(grid);
@@ -278,7 +303,13 @@ GridReport inspect_vdb(const std::filesystem::path& path) {
     if (const openvdb::CoordBBox b = grid->evalActiveVoxelBoundingBox(); !b.empty()) {
       const Coord lo{b.min().x(), b.min().y(), b.min().z()}, hi{b.max().x(), b.max().y(), b.max().z()};
       info.active_index_bounds = std::pair(lo, hi);
-      info.active_world_bounds = world_box(info.world_from_index, lo, hi);
+      info.active_world_bounds = world_box(info.world_from_index, lo, hi, 0.5f);
+    }
+    if (const auto stored = stored_voxels(*grid)) {
+      info.stored_index_bounds = stored;
+      for (const Interpolation i : {Interpolation::nearest, Interpolation::trilinear})
+        info.medium_world_bounds[int(i)] =
+            world_box(info.world_from_index, stored->first, stored->second, support_radius(i));
     }
     info.active_voxels = int64_t(grid->activeVoxelCount());
     info.memory_bytes = int64_t(grid->memUsage());

@@ -24,10 +24,12 @@ struct GridLoadOptions {
 };
 
 // Loads the float grid `grid_name` with its index-to-world transform (any
-// affine map, non-uniform scale included) and its metadata "unit", "scale" and
-// "provenance". Throws InputError naming the file, the grid and the problem:
-// missing file, unreadable file, no such grid (listing the grids there are),
-// not a float grid, non-linear (frustum) transform, invalid values.
+// affine map, non-uniform scale included, in the metadata's length unit) and
+// its metadata "unit", "scale", "length_unit" and "provenance". A double grid is
+// converted to float (metadata().converted_from says so). Throws InputError
+// naming the file, the grid and the problem: missing file, unreadable file, no
+// such grid (listing the grids there are), neither float nor double,
+// non-linear (frustum) transform, invalid values.
 VoxelGrid load_concentration_grid(const std::filesystem::path& path, std::string_view grid_name,
                                   GridLoadOptions options = {});
 
@@ -50,6 +52,11 @@ struct GridInfo {
   Vec3 voxel_size;                    // world units per voxel along index x, y, z
   std::optional<std::pair<Coord, Coord>> active_index_bounds;  // inclusive voxel range; none if no active values
   Bounds3 active_world_bounds;        // world box around the active voxels' cells
+  // Voxels a lookup can see differ from the background (active ones and every voxel
+  // of a leaf node), as the renderer loads them; none if the grid is empty.
+  std::optional<std::pair<Coord, Coord>> stored_index_bounds;
+  // The box of a medium made of this grid, by Interpolation (VoxelGrid::world_bounds).
+  Bounds3 medium_world_bounds[2];
   std::optional<std::pair<double, double>> value_range;  // of active values (scalar grids)
   int64_t active_voxels = 0;
   int64_t memory_bytes = 0;

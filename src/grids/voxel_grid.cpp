@@ -283,16 +283,17 @@ float VoxelGrid::mean(Coord lo, Coord hi) const {
   return count > 0 ? float(sum / double(count)) : background_;
 }
 
-Bounds3 VoxelGrid::index_bounds() const {
+Bounds3 VoxelGrid::index_bounds(Interpolation interpolation) const {
   Bounds3 b;
   if (index_lo_[0] > index_hi_[0] || index_lo_[1] > index_hi_[1] || index_lo_[2] > index_hi_[2]) return b;
-  b.lo = Vec3{float(index_lo_[0]), float(index_lo_[1]), float(index_lo_[2])} - Vec3{0.5f, 0.5f, 0.5f};
-  b.hi = Vec3{float(index_hi_[0]), float(index_hi_[1]), float(index_hi_[2])} + Vec3{0.5f, 0.5f, 0.5f};
+  const Vec3 r(support_radius(interpolation));
+  b.lo = Vec3{float(index_lo_[0]), float(index_lo_[1]), float(index_lo_[2])} - r;
+  b.hi = Vec3{float(index_hi_[0]), float(index_hi_[1]), float(index_hi_[2])} + r;
   return b;
 }
 
-Bounds3 VoxelGrid::world_bounds() const {
-  const Bounds3 ib = index_bounds();
+Bounds3 VoxelGrid::world_bounds(Interpolation interpolation) const {
+  const Bounds3 ib = index_bounds(interpolation);
   Bounds3 wb;
   if (ib.empty()) return wb;
   for (int c = 0; c < 8; ++c)

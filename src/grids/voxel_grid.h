@@ -26,16 +26,25 @@ namespace chlorovdb {
 
 enum class Interpolation { trilinear, nearest };
 
+// How far past the centres of the outermost stored voxels a lookup can still
+// differ from the background, in voxels: a nearest lookup reads a voxel over
+// its cell (half a voxel each side), a trilinear one fades it out over one voxel.
+inline float support_radius(Interpolation interpolation) {
+  return interpolation == Interpolation::trilinear ? 1.f : 0.5f;
+}
+
 using Coord = std::array<int, 3>;
 
 // Where a grid came from and what its values mean (the .vdb metadata "unit",
-// "scale" and "provenance" that write_concentration_grid stores).
+// "scale", "length_unit" and "provenance" that write_concentration_grid stores).
 struct GridMetadata {
   std::string name;        // grid name in the file
   std::string file;        // source path; empty for grids built in memory
   std::string unit;        // unit of value * scale, e.g. "uM"; empty when the file does not say
   float scale = 1.f;       // stored value * scale = quantity in `unit`
+  std::string length_unit; // unit of the index-to-world transform ("m", "cm", ...); empty = metres
   std::string provenance;  // free text: who made the grid and how
+  std::string converted_from;  // value type of the file's grid when it was not float ("double"), else empty
   int64_t clamped_voxels = 0;  // NaN / Inf / negative values clamped to 0 (clamp_invalid)
 };
 
@@ -45,7 +54,7 @@ struct DenseGrid {
   Coord dims{0, 0, 0};            // voxels per axis
   Coord origin{0, 0, 0};          // index of the first voxel
   std::vector<float> values;      // values[x + dims[0] * (y + dims[1] * z)], x fastest, relative to origin
-  Transform world_from_index;     // voxel centre (i,j,k) -> world (metres)
+  Transform world_from_index;     // voxel centre (i,j,k) -> world (metadata.length_unit, metres by default)
   float background = 0.f;         // value everywhere outside the box
   GridMetadata metadata;          // name, unit, scale, provenance
 
@@ -110,10 +119,11 @@ class VoxelGrid {
   // Voxels that may differ from the background (inclusive).
   Coord index_lo() const { return index_lo_; }
   Coord index_hi() const { return index_hi_; }
-  // Continuous index-space box the voxels cover: [lo - 1/2, hi + 1/2].
-  Bounds3 index_bounds() const;
-  // Axis-aligned world box around index_bounds().
-  Bounds3 world_bounds() const;
+  // Continuous index-space box outside which every lookup of this interpolation
+  // returns the background: [lo - r, hi + r] with r = support_radius(interpolation).
+  Bounds3 index_bounds(Interpolation interpolation) const;
+  // Axis-aligned world box around index_bounds(interpolation).
+  Bounds3 world_bounds(Interpolation interpolation) const;
   float background() const { return background_; }
   float min_value() const { return min_value_; }  // over stored voxels and background
   float max_value() const { return max_value_; }

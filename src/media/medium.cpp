@@ -92,7 +92,7 @@ std::optional<Medium::GridRegion> Medium::grid_region() const {
   if (homogeneous()) return std::nullopt;
   Bounds3 b;
   for (const Channel& c : channels_) {
-    const Bounds3 g = c.grid->index_bounds();
+    const Bounds3 g = c.grid->index_bounds(desc_.interpolation);
     if (g.empty()) continue;
     const Transform medium_from_grid = c.grid_from_medium_index.inverse();
     for (int i = 0; i < 8; ++i)

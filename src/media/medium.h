@@ -142,8 +142,8 @@ class Medium {
   int channels() const { return int(channels_.size()); }
 
   // The grids' region for media bounded by their grids: a box in the grid
-  // index space (the union of every grid's voxel cells) and its transform to
-  // world. None for homogeneous media.
+  // index space (the union of every grid's support under the medium's
+  // interpolation: VoxelGrid::index_bounds) and its transform to world. None for homogeneous media.
   struct GridRegion {
     Bounds3 index_bounds;
     Transform world_from_index;

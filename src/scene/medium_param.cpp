@@ -53,8 +53,8 @@ void check_field_maximum(ParamReader& p, const std::string& key, double max_inte
                             : fmt::format("reaches {:.3g} /m (values x scale); at most {:g} /m", max_internal, limit));
 }
 
-// A concentration or coefficient: a number, or {"file", "name", "scale", "unit"}.
-Field read_field(ParamReader& p, const std::string& key, bool concentration, GridCache& grids, float unit) {
+// A concentration or coefficient: a number, or {"file", "name", "scale", "unit", "length_unit"}.
+Field read_field(ParamReader& p, const std::string& key, bool concentration, GridCache& grids) {
   const nlohmann::json& v = p.raw(key);
   if (v.is_number()) {
     const float value = p.require_float(key, 0.f);
@@ -67,14 +67,24 @@ Field read_field(ParamReader& p, const std::string& key, bool concentration, Gri
   const std::filesystem::path file = g.require_path("file");
   const std::string name = g.get_string("name", "density");
   const float scale = g.get_float("scale", 1.f, 0.f);
+  // The grid's transform is in its own length unit: the scene's word, else the
+  // grid's "length_unit" metadata, else metres (what voxelize writes).
+  const std::string length_unit = g.has("length_unit") ? g.get_enum("length_unit", "m", kLengthUnits) : "";
   GridLoadOptions options;
   options.clamp_invalid = g.get_bool("clamp_invalid", false);
-  auto& grid = grids[{file.string(), name}];
+  auto& grid = grids[{file.string(), name, length_unit}];
   if (!grid) {
-    VoxelGrid g = load_concentration_grid(file, name, options);
-    // A grid's world units are the scene's (voxelize writes the mesh's own units).
-    if (unit != 1.f) g.set_world_from_index(Transform::scale(Vec3(unit)) * g.world_from_index());
-    grid = std::make_shared<const VoxelGrid>(std::move(g));
+    VoxelGrid loaded = load_concentration_grid(file, name, options);
+    const std::string& own = loaded.metadata().length_unit;
+    const std::string word = !length_unit.empty() ? length_unit : own.empty() ? "m" : own;
+    const float metres = metres_per_length_unit(word);
+    if (metres == 0.f)
+      throw InputError(file.string(), fmt::format("grid {}: metadata length_unit", name), word,
+                       fmt::format("unknown length unit; use one of {} (or set {} in the scene)",
+                                   fmt::join(kLengthUnits, ", "), g.key_path("length_unit")));
+    if (metres != 1.f)
+      loaded.set_world_from_index(Transform::scale(Vec3(metres)) * loaded.world_from_index());
+    grid = std::make_shared<const VoxelGrid>(std::move(loaded));
   }
   float to_internal = 1.f;
   if (concentration) {
@@ -89,6 +99,16 @@ Field read_field(ParamReader& p, const std::string& key, bool concentration, Gri
 }
 
 }  // namespace
+
+const std::vector<std::string> kLengthUnits{"m", "cm", "mm", "um"};
+
+float metres_per_length_unit(const std::string& unit) {
+  if (unit == "m") return 1.f;
+  if (unit == "cm") return 1e-2f;
+  if (unit == "mm") return 1e-3f;
+  if (unit == "um") return 1e-6f;
+  return 0.f;
+}
 
 PigmentTable read_pigments(ParamReader& top) {
   PigmentTable table;
@@ -108,7 +128,7 @@ PigmentTable read_pigments(ParamReader& top) {
   return table;
 }
 
-MediumDefinition read_medium(ParamReader& m, const PigmentTable& pigments, GridCache& grids, float unit) {
+MediumDefinition read_medium(ParamReader& m, const PigmentTable& pigments, GridCache& grids) {
   MediumDesc desc;
   desc.where = fmt::format("{}: {}", m.file().string(), m.key_path(""));
   // Solvent.
@@ -138,7 +158,7 @@ MediumDefinition read_medium(ParamReader& m, const PigmentTable& pigments, GridC
                                         near.empty() ? "" : fmt::format(" (did you mean \"{}\"?)", near)));
     }
     if (entry.has("concentration") == entry.has("grid")) entry.fail("", "give either \"concentration\" or \"grid\"");
-    PigmentInMedium pm{it->second.pigment, read_field(entry, entry.has("grid") ? "grid" : "concentration", true, grids, unit)};
+    PigmentInMedium pm{it->second.pigment, read_field(entry, entry.has("grid") ? "grid" : "concentration", true, grids)};
     entry.finish();
     if (int(desc.pigments.size()) == kMaxPigments)
       entry.fail("pigment", fmt::format("a medium holds at most {} pigments", kMaxPigments));
@@ -155,7 +175,7 @@ MediumDefinition read_medium(ParamReader& m, const PigmentTable& pigments, GridC
   }
   // Particle scattering.
   if (auto s = m.optional_child("scattering")) {
-    desc.particle_sigma_s = read_field(*s, "coefficient", false, grids, unit);
+    desc.particle_sigma_s = read_field(*s, "coefficient", false, grids);
     desc.particle_phase = HenyeyGreenstein{s->get_float("g", 0.f, -0.999f, 0.999f)};
     s->finish();
   }

@@ -4,6 +4,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include "media/medium.h"
@@ -20,15 +21,21 @@ using PigmentTable = std::map<std::string, PigmentDefinition>;
 
 PigmentTable read_pigments(ParamReader& top);
 
-// Grids read once per (file, name) and shared by every field that names them.
-using GridCache = std::map<std::pair<std::string, std::string>, std::shared_ptr<const VoxelGrid>>;
+// Length units of scenes and grids ("m", "cm", "mm", "um") and their size in
+// metres (0 for any other word).
+extern const std::vector<std::string> kLengthUnits;
+float metres_per_length_unit(const std::string& unit);
+
+// Grids read once per (file, name, length unit given in the scene) and shared by every field that names them.
+using GridCache =
+    std::map<std::tuple<std::string, std::string, std::string>, std::shared_ptr<const VoxelGrid>>;
 
 struct MediumDefinition {
   Medium medium;
   std::vector<FluorescentPigment> fluorescent;  // its pigments with Q > 0 (lights filled in later)
 };
-// `unit`: the scene's length unit in metres; grid transforms are in that unit.
-MediumDefinition read_medium(ParamReader& params, const PigmentTable& pigments, GridCache& grids, float unit);
+// Grid transforms are in each grid's own length unit (docs/scene-format.md), not the scene's.
+MediumDefinition read_medium(ParamReader& params, const PigmentTable& pigments, GridCache& grids);
 
 // True when anything in the medium scatters (molecules or particles).
 bool can_scatter(const Medium& medium);

@@ -114,6 +114,8 @@ struct Scene {
   std::vector<bool> medium_scatters;  // anything in it scatters (molecules or particles)
   std::vector<std::vector<FluorescentPigment>> fluorescence;  // per medium
   int camera_medium = -1;
+  std::vector<std::string> warnings;  // loader's doubts about the scene (e.g. a grid's length unit); printed by render
+  std::vector<std::string> notes;     // what the loader changed (e.g. a double grid converted to float); printed by render
 
   // Absorbing-only media need no collision sampling: transmittance is a weight.
   // Not for the reference estimator, whose fluorescence events are absorptions.

@@ -38,12 +38,11 @@ class NameTable {
   std::map<std::string, int> index_;
 };
 
+// A grid more than this factor smaller or larger than the rest of the scene gets a warning.
+constexpr float kGridScaleWarning = 100.f;
+
 float length_unit_in_metres(ParamReader& top) {
-  const std::string unit = top.get_enum("length_unit", "m", {"m", "cm", "mm", "um"});
-  if (unit == "cm") return 1e-2f;
-  if (unit == "mm") return 1e-3f;
-  if (unit == "um") return 1e-6f;
-  return 1.f;
+  return metres_per_length_unit(top.get_enum("length_unit", "m", kLengthUnits));
 }
 
 const std::vector<std::string> kFluorescenceModes{"auto", "direct", "full", "reference", "off"};
@@ -108,7 +107,8 @@ RenderSettings read_render_settings(ParamReader& top, const SceneOverrides& o, s
   return s;
 }
 
-Camera read_camera(ParamReader& top, const RenderSettings& s, float unit) {
+// The camera; its eye and target points (metres) go to *eye and *target.
+Camera read_camera(ParamReader& top, const RenderSettings& s, float unit, Vec3* eye_out, Vec3* target_out) {
   ParamReader c = top.child("camera");
   const std::string type = c.get_enum("type", "perspective", {"perspective", "orthographic"});
   const Vec3 eye = c.require_vec3("position") * unit;
@@ -118,6 +118,8 @@ Camera read_camera(ParamReader& top, const RenderSettings& s, float unit) {
   if (!std::isfinite(length(target - eye)))
     c.fail("look_at", "is too far from \"position\" for single precision (their distance overflows)");
   if (length(up) == 0.f) c.fail("up", "must not be the zero vector");
+  *eye_out = eye;
+  *target_out = target;
   Transform world_from_camera;
   try {
     world_from_camera = Transform::look_at(eye, target, up);
@@ -361,7 +363,8 @@ Scene load_scene(const std::filesystem::path& file, const SceneOverrides& overri
   const float unit = length_unit_in_metres(top);
   std::string fluorescence_mode, transmittance;
   const RenderSettings settings = read_render_settings(top, overrides, &fluorescence_mode, &transmittance);
-  Scene scene(read_camera(top, settings, unit));
+  Vec3 scene_eye, scene_target;
+  Scene scene(read_camera(top, settings, unit, &scene_eye, &scene_target));
   scene.file = file;
   scene.settings = settings;
 
@@ -370,13 +373,18 @@ Scene load_scene(const std::filesystem::path& file, const SceneOverrides& overri
   NameTable media;
   GridCache grids;
   for (auto& [name, m] : top.children_map("media")) {
-    MediumDefinition def = read_medium(m, pigments, grids, unit);
+    MediumDefinition def = read_medium(m, pigments, grids);
     media.add(name, int(scene.media.size()));
     scene.media.push_back(std::move(def.medium));
     scene.medium_names.push_back(name);
     scene.medium_scatters.push_back(can_scatter(scene.media.back()));
     scene.fluorescence.push_back(std::move(def.fluorescent));
   }
+
+  for (const auto& [key, grid] : grids)
+    if (!grid->metadata().converted_from.empty())
+      scene.notes.push_back(fmt::format("{}: grid {} holds {} values: converted to float on load",
+                                        grid->metadata().file, grid->metadata().name, grid->metadata().converted_from));
 
   NameTable materials;
   for (auto& [name, m] : top.children_map("materials")) {
@@ -420,6 +428,22 @@ Scene load_scene(const std::filesystem::path& file, const SceneOverrides& overri
     sh.finish();
     if (int(scene.shapes.size()) != id) throw std::logic_error("shape ids must be dense");
     scene.shapes.push_back(b);
+  }
+  // A grid in the wrong length unit is 100 or 1000 times too small or too big and
+  // renders as nothing or as a fog over everything: compare it with the rest of the scene.
+  Bounds3 others = scene.geometry.bounds();
+  others.extend(scene_eye);
+  others.extend(scene_target);
+  const float scene_size = max_component(others.hi - others.lo);
+  for (size_t m = 0; m < scene.media.size(); ++m) {
+    const std::optional<Bounds3> box = medium_bounds(scene.media[m]);
+    if (!box || box->empty() || !(scene_size > 0.f)) continue;
+    const float grid_size = max_component(box->hi - box->lo);
+    if (grid_size < scene_size / kGridScaleWarning || grid_size > scene_size * kGridScaleWarning)
+      scene.warnings.push_back(fmt::format(
+          "{}: media.{}: the grid is {:.3g} m across, the camera and shapes span {:.3g} m: check the grid's "
+          "length unit (its \"length_unit\" metadata, metres by default, or the grid's \"length_unit\" key)",
+          file.string(), scene.medium_names[m], grid_size, scene_size));
   }
   // A grid medium no shape bounds fills its grid's world box, behind an invisible interface.
   for (size_t m = 0; m < scene.media.size(); ++m) {

@@ -520,7 +520,7 @@ void check_voxel_volume(const VoxelizeOptions& o) {
     throw InputError(source_of(o), "--voxel-size", fmt::format("{},{},{}", h.x, h.y, h.z),
                      fmt::format("voxels of {:.3g} cubic units are smaller than an OpenVDB transform can hold "
                                  "({:.0e}; e.g. 15 µm cubes in metres): give the mesh and --voxel-size in millimetres "
-                                 "or micrometres (--scale) and set the scene's length_unit to match",
+                                 "or micrometres (--scale) and give the grid's length_unit in the scene to match",
                                  volume, kMinVolume));
 }
 

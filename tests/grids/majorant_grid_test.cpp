@@ -59,7 +59,7 @@ TEST(MajorantGrid, SegmentsTileTheRayExactly) {
   const MajorantGrid m(channels, 8, Interpolation::trilinear);
   Rng rng(test_seed(2), 0);
   for (int i = 0; i < 5000; ++i) {
-    const Ray r = random_ray(g.index_bounds(), rng, i % 4 == 0);
+    const Ray r = random_ray(g.index_bounds(Interpolation::trilinear), rng, i % 4 == 0);
     const float t_max = 200.f * rng.uniform();
     const auto segs = collect(m, r, t_max);
     ASSERT_FALSE(segs.empty());
@@ -251,7 +251,7 @@ TEST(MajorantGrid, CellMeansAreTheMeansOfTheirOwnVoxels) {
         }
     Rng rng(test_seed(6), 0);
     for (int i = 0; i < 200; ++i)
-      for (const MajorantSegment& s : collect(m, random_ray(g.index_bounds(), rng, false), 100.f)) {
+      for (const MajorantSegment& s : collect(m, random_ray(g.index_bounds(Interpolation::trilinear), rng, false), 100.f)) {
         ASSERT_LE(*s.c_min, *s.c_mean);
         ASSERT_GE(*s.c_max, *s.c_mean);
       }

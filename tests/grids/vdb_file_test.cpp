@@ -1,5 +1,5 @@
 // Round trips through real .vdb files. OpenVDB itself is included only to
-// write a grid of the wrong type, which write_concentration_grid cannot make.
+// write grids of other value types (vec3s, double), which write_concentration_grid cannot make.
 #include "scratch_dir.h"
 #include <gtest/gtest.h>
 
@@ -109,6 +109,33 @@ TEST(VdbFile, WrongTypeIsRefused) {
   EXPECT_NE(msg.find("velocity"), std::string::npos) << msg;
   EXPECT_NE(msg.find("vec3s"), std::string::npos) << msg;
   EXPECT_EQ(inspect_vdb(path).grids.at(0).type, "vec3s");
+}
+
+// Double grids (common in public files) are read as float: values rounded,
+// transform and metadata kept, and the conversion recorded.
+TEST(VdbFile, DoubleGridIsConvertedToFloat) {
+  openvdb::initialize();
+  auto grid = openvdb::DoubleGrid::create(0.0);
+  grid->setName("smoke");
+  grid->setTransform(openvdb::math::Transform::createLinearTransform(0.05));
+  grid->insertMeta("unit", openvdb::StringMetadata("nM"));
+  const double third = 1.0 / 3.0;
+  grid->tree().setValue(openvdb::Coord(1, 2, 3), third);
+  grid->tree().setValue(openvdb::Coord(-9, 0, 17), 2.5);
+  const auto path = temp_path("double.vdb");
+  openvdb::io::File(path.string()).write({grid});
+  const VoxelGrid g = load_concentration_grid(path, "smoke");
+  EXPECT_EQ(g.metadata().converted_from, "double");
+  EXPECT_EQ(g.metadata().unit, "nM");
+  EXPECT_EQ(g.voxel(1, 2, 3), float(third));
+  EXPECT_EQ(g.voxel(-9, 0, 17), 2.5f);
+  EXPECT_EQ(g.voxel(0, 0, 0), 0.f);
+  EXPECT_NEAR(g.world_from_index().point({2, 0, 0}).x, 0.1f, 1e-7f);
+  EXPECT_EQ(g.index_lo()[0], -16);  // the leaf node holding (-9, 0, 17) starts at -16
+  // A float grid records no conversion.
+  const auto fpath = temp_path("float_for_double.vdb");
+  write_concentration_grid(fpath, test_grid("chl"));
+  EXPECT_EQ(load_concentration_grid(fpath, "chl").metadata().converted_from, "");
 }
 
 TEST(VdbFile, InvalidValuesAreRefusedOrClamped) {

@@ -187,11 +187,17 @@ TEST(VoxelGrid, WorldBoundsFollowNonUniformScale) {
   DenseGrid d({10, 20, 5}, 1.f);
   d.world_from_index = Transform::translate({1, 2, 3}) * Transform::scale({0.1f, 0.01f, 2.f});
   const VoxelGrid g = VoxelGrid::from_dense(d);
-  const Bounds3 b = g.world_bounds();
+  const Bounds3 b = g.world_bounds(Interpolation::nearest);
   EXPECT_NEAR(b.lo.x, 1.f - 0.05f, 1e-5f);
   EXPECT_NEAR(b.hi.x, 1.f + 0.95f, 1e-5f);
   EXPECT_NEAR(b.lo.y, 2.f - 0.005f, 1e-5f);
   EXPECT_NEAR(b.hi.y, 2.f + 0.195f, 1e-5f);
   EXPECT_NEAR(b.lo.z, 3.f - 1.f, 1e-5f);
   EXPECT_NEAR(b.hi.z, 3.f + 9.f, 1e-5f);
+  // Trilinear lookups fade each voxel out over a whole voxel.
+  const Bounds3 t = g.world_bounds(Interpolation::trilinear);
+  EXPECT_NEAR(t.lo.x, 1.f - 0.1f, 1e-5f);
+  EXPECT_NEAR(t.hi.x, 1.f + 1.0f, 1e-5f);
+  EXPECT_NEAR(t.lo.z, 3.f - 2.f, 1e-5f);
+  EXPECT_NEAR(t.hi.z, 3.f + 10.f, 1e-5f);
 }

@@ -23,7 +23,9 @@ std::string sanitize(std::string s) {
 // An 8^3 grid of a smooth blob (peak at the centre, 0 at the corners) with voxel
 // size h, placed with its index origin at `index_origin` and its world origin at
 // `offset`, scaled so the optical depth through the centre is about `tau`.
-std::filesystem::path write_blob_grid(const std::string& name, double h, Vec3 offset, Coord index_origin, double tau) {
+// `length_unit` is stored as the grid's metadata (empty: none, i.e. metres).
+std::filesystem::path write_blob_grid(const std::string& name, double h, Vec3 offset, Coord index_origin, double tau,
+                                      const std::string& length_unit = "") {
   DenseGrid g({8, 8, 8});
   g.origin = index_origin;
   double column = 0;
@@ -42,6 +44,7 @@ std::filesystem::path write_blob_grid(const std::string& name, double h, Vec3 of
                        Transform::translate(Vec3(-float(index_origin[0]), -float(index_origin[1]), -float(index_origin[2])));
   g.metadata.name = "density";
   g.metadata.unit = "M";
+  g.metadata.length_unit = length_unit;
   const auto path = scratch_dir() / (name + ".vdb");
   write_concentration_grid(path, g);
   return path;
@@ -49,7 +52,8 @@ std::filesystem::path write_blob_grid(const std::string& name, double h, Vec3 of
 
 // The grid medium fills its own box (no shape bounds it); a diffuse floor just
 // below it; a white environment and a UV distant light.
-// Positions, h and offset are in the file's `length_unit` (grids too, per docs/scene-format.md).
+// Positions, h and offset are in the file's `length_unit`; the grid's transform is in its own
+// (its metadata, metres by default: docs/scene-format.md), so the caller writes it in the same unit.
 std::string blob_scene(const std::filesystem::path& grid, double h, Vec3 offset, const std::string& camera_type,
                        const std::string& length_unit = "m") {
   const double cx = offset.x + 3.5 * h, cy = offset.y + 3.5 * h, cz = offset.z + 3.5 * h;
@@ -91,10 +95,10 @@ void voxel_sizes(const std::string& camera) {
     RenderCase c;
     c.name = "voxel_" + sanitize(num(h)) + "m_" + camera;
     // OpenVDB cannot store voxels under ~1e-5 of its unit (its maps refuse |det| < ~1e-15),
-    // so micrometre voxels are written as 1 "um" and the scene says length_unit "um".
+    // so micrometre voxels are written as 1 "um" (the grid's length_unit metadata) and the scene says "um".
     const bool micro = h < 1e-5;
     const double h_file = micro ? h * 1e6 : h;
-    const auto grid = write_blob_grid(c.name, h_file, Vec3(0.f), {0, 0, 0}, 3.0 * h_file / h);
+    const auto grid = write_blob_grid(c.name, h_file, Vec3(0.f), {0, 0, 0}, 3.0 * h_file / h, micro ? "um" : "");
     c.json = blob_scene(grid, h_file, Vec3(0.f), camera, micro ? "um" : "m");
     if (const auto o = try_case(c)) EXPECT_GT(o->mean_luminance, 0.0) << c.name << ": black image";
   }
@@ -122,23 +126,24 @@ TEST(Stress, MicrometreVoxelsInMetresGiveAnInputError) {
   }
 }
 
-// docs/scene-format.md: "length_unit: unit of every position and length in the file
-// (grids keep their own transform, scaled by this unit)". The same physical scene
-// written in metres and in centimetres (grid voxel 0.01 m = 1 cm) must render alike.
-TEST(Stress, LengthUnitScalesGrids) {
+// docs/scene-format.md: a grid's transform is in its own length unit (its
+// "length_unit" metadata, metres by default); the scene's length_unit applies to
+// the scene's own positions. The same physical scene written in metres and in
+// centimetres (grid voxel 0.01 m = 1 cm, metadata "cm") must render alike.
+TEST(Stress, GridLengthUnitMetadataPlacesGrids) {
   RenderCase m, cm;
   m.name = "length_unit_m";
   cm.name = "length_unit_cm";
   // Same optical depth 3 through the centre in both (the grid values are concentrations).
   const auto grid_m = write_blob_grid(m.name, 0.01, Vec3(0.f), {0, 0, 0}, 3.0);
-  const auto grid_cm = write_blob_grid(cm.name, 1.0, Vec3(0.f), {0, 0, 0}, 3.0 / 0.01);
+  const auto grid_cm = write_blob_grid(cm.name, 1.0, Vec3(0.f), {0, 0, 0}, 3.0 / 0.01, "cm");
   m.json = blob_scene(grid_m, 0.01, Vec3(0.f), "perspective", "m");
   cm.json = blob_scene(grid_cm, 1.0, Vec3(0.f), "perspective", "cm");
   m.spp = cm.spp = 64;
   m.seconds = cm.seconds = 30;
   const RenderOutcome a = render_case(m), b = render_case(cm);
   EXPECT_NEAR(b.mean_luminance, a.mean_luminance, 0.05 * a.mean_luminance)
-      << "the same scene in cm renders differently: is the grid transform scaled by length_unit?";
+      << "the same scene in cm renders differently: is the grid's length_unit metadata applied?";
 }
 
 // ---------------------------------------------------------------------------

@@ -248,7 +248,7 @@ TEST(SampleTMaj, FurnaceWithAChromaticPureScattererReturnsOnePerLane) {
   d.particle_sigma_s = Field::from_grid(grid, 3e-3f);
   d.particle_phase = HenyeyGreenstein{0.5f};
   const Medium m(d);
-  const Bounds3 box = grid->world_bounds();
+  const Bounds3 box = grid->world_bounds(d.interpolation);
   const float lambda_nm[] = {450.f, 650.f, 550.f, 700.f}, lambda_pdf[] = {1.f, 1.f, 1.f, 1.f};
   const SampledWavelengths lambda = SampledWavelengths::from_values(lambda_nm, lambda_pdf, 4);
   const PreparedMedium pm = prepare(m, lambda);
