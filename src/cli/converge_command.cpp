@@ -118,7 +118,7 @@ int converge(const ConvergeArgs& a) {
     if (!a.scene.empty()) fmt::print(stderr, "note: --analytic {} defines its own scene; {} is ignored\n", a.analytic, a.scene.string());
     scene_file = write_slab_scene(*slab, std::filesystem::path(prefix.string() + "_scene"));
   }
-  const Scene scene = load_scene_variant(scene_file, o, a.sets);
+  const Scene scene = load_scene(scene_file, o, a.sets);
   const Image reference = slab ? slab_reference_image(*slab, scene) : read_exr(a.reference);
   if (reference.width != scene.settings.width || reference.height != scene.settings.height)
     throw InputError(a.reference.string(), "", fmt::format("{}x{}", reference.width, reference.height),

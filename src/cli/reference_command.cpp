@@ -96,7 +96,7 @@ int reference(const ReferenceArgs& a) {
   o.fluorescence = a.fluorescence;
   o.transmittance = a.transmittance;
   if (a.resolution) parse_resolution(*a.resolution, o);
-  const Scene scene = load_scene_variant(a.scene, o, a.sets);
+  const Scene scene = load_scene(a.scene, o, a.sets);
   std::filesystem::path out = a.output;
   if (out.extension() != ".exr") out += ".exr";
   if (out.has_parent_path()) std::filesystem::create_directories(out.parent_path());
