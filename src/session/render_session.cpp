@@ -219,15 +219,12 @@ RenderOutcome run_render_session(const Scene& scene, const RenderJob& job) {
   return o;
 }
 
-Image session_image(const Scene& scene, const RenderJob& job, const RenderOutcome& o) {
+Image film_image(const Scene& scene, const RenderJob& job, const Film& film, int samples_done) {
   const RenderSettings& s = scene.settings;
-  Image image = o.film.to_image(o.samples_done);
+  Image image = film.to_image(samples_done);
   Metadata& m = image.metadata;
-  m.set("spp", o.samples_done);
-  m.set("spp_requested", o.range.size());
-  m.set("sample_first", o.range.begin);
+  m.set("spp", samples_done);
   m.set("seed", std::to_string(job_seed(scene, job)));  // a string keeps all 64 bits
-  m.set("wall_time_s", o.seconds);
   m.set("version", CHLOROVDB_VERSION);
   m.set("scene", std::filesystem::absolute(scene.file).string());
   m.set("wavelengths_per_path", s.wavelengths);
@@ -238,6 +235,15 @@ Image session_image(const Scene& scene, const RenderJob& job, const RenderOutcom
       if (!med.homogeneous()) cells += fmt::format("{}{}", cells.empty() ? "" : " ", med.majorant_grid().voxels_per_cell());
     if (!cells.empty()) m.set("majorant_cell_voxels", cells);
   }
+  return image;
+}
+
+Image session_image(const Scene& scene, const RenderJob& job, const RenderOutcome& o) {
+  Image image = film_image(scene, job, o.film, o.samples_done);
+  Metadata& m = image.metadata;
+  m.set("spp_requested", o.range.size());
+  m.set("sample_first", o.range.begin);
+  m.set("wall_time_s", o.seconds);
   m.set("interrupted", o.interrupted ? 1 : 0);
   if (o.stopped_by_rule) m.set("stopped_by_rule", 1);
   m.set("nonfinite_samples", double(o.nonfinite_samples));  // including sessions before a resume

@@ -76,6 +76,10 @@ struct RenderOutcome {
 // Renders `scene` as `job` says. Throws InputError for a bad checkpoint or job.
 RenderOutcome run_render_session(const Scene& scene, const RenderJob& job);
 
+// `film` holding `samples_done` samples per pixel as an image with the
+// metadata that does not depend on the outcome (spp, seed, version, scene, ...).
+Image film_image(const Scene& scene, const RenderJob& job, const Film& film, int samples_done);
+
 // The film as an image with the session's metadata (spp, seed, wall time,
 // scene, part, ...). `outcome.samples_done` must be > 0.
 Image session_image(const Scene& scene, const RenderJob& job, const RenderOutcome& outcome);

@@ -223,6 +223,44 @@ TEST(RenderCli, SetEditsASceneInAReadOnlyFolderWithoutWritingBesideIt) {
   EXPECT_NE(bad.output.find("has no element 9"), std::string::npos) << bad.output;
 }
 
+// `reference` is the render session with its checkpoint beside the EXR: Ctrl-C
+// writes the EXR so far, --resume continues from the exact sums, and the result
+// is bit for bit the uninterrupted reference.
+TEST(ReferenceCli, InterruptedReferenceResumesToTheUninterruptedOne) {
+  const TestDir dir;
+  auto args = [&](const std::string& name, std::vector<std::string> extra) {
+    std::vector<std::string> a = {kExe, "reference", scene_file(), "-o", (dir / name).string(), "--spp", "400", "--resolution", "32x24",
+                                  "--wavelengths", "4", "--seed", "3", "--threads", "2", "--checkpoint-every", "0", "-q"};
+    a.insert(a.end(), extra.begin(), extra.end());
+    return a;
+  };
+  const Child c = spawn(args("int.exr", {}), dir / "int.log");
+  ASSERT_TRUE(wait_for_file(c, dir / "int.exr.ckpt", std::chrono::seconds(60))) << read_text(dir / "int.log");
+  ::kill(c.pid, SIGINT);
+  EXPECT_EQ(wait_for(c), 130) << read_text(dir / "int.log");
+  const Image partial = read_exr(dir / "int.exr");
+  const int done = metadata_int(partial, "spp_done");
+  EXPECT_GT(done, 0);
+  EXPECT_LT(done, 400);
+  EXPECT_EQ(read_checkpoint_header(dir / "int.exr.ckpt").samples_done, done);
+
+  const auto resumed = run(args("int.exr", {"--resume"}), dir / "resumed.log");
+  ASSERT_EQ(resumed.status, 0) << resumed.output;
+  EXPECT_NE(resumed.output.find("resuming"), std::string::npos) << resumed.output;
+  const auto whole = run(args("whole.exr", {}), dir / "whole.log");
+  ASSERT_EQ(whole.status, 0) << whole.output;
+  const Image a = read_exr(dir / "int.exr");
+  EXPECT_EQ(metadata_int(a, "spp_done"), 400);
+  expect_same_pixels(a, read_exr(dir / "whole.exr"));
+
+  // Another seed cannot resume it.
+  auto other = args("int.exr", {"--resume"});
+  other[std::find(other.begin(), other.end(), "--seed") - other.begin() + 1] = "4";
+  const auto refused = run(other, dir / "refused.log");
+  EXPECT_NE(refused.status, 0);
+  EXPECT_NE(refused.output.find("seed"), std::string::npos) << refused.output;
+}
+
 TEST(MergeCli, TwoSampleRangesAndTwoCropsMergeToTheSingleRun) {
   const TestDir dir;
   const auto ref = run(render_args(dir / "single.exr", {"--spp", "16", "--checkpoint", (dir / "single.ckpt").string()}), dir / "single.log");

@@ -74,7 +74,7 @@ for scene in "${scenes[@]}"; do
 
   # Reference: cached across runs, restarted when the scene or the settings change.
   stamp="$(sha256sum "$scene" | cut -d' ' -f1) $RESOLUTION $REF_SPP"
-  if [ "$(cat "$dir/reference.stamp" 2>/dev/null)" != "$stamp" ]; then rm -f "$dir/reference.exr"; fi
+  if [ "$(cat "$dir/reference.stamp" 2>/dev/null)" != "$stamp" ]; then rm -f "$dir/reference.exr" "$dir/reference.exr.ckpt"; fi
   "$CHLOROVDB" reference "$scene" -o "$dir/reference.exr" --spp "$REF_SPP" --resolution "$RESOLUTION" \
     --seed "$REF_SEED" --threads "$REF_THREADS" --checkpoint-every 30 --resume -q
   echo "$stamp" > "$dir/reference.stamp"
