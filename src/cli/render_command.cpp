@@ -159,7 +159,7 @@ int render(const RenderArgs& a) {
   write_png(png, image.layers[0], r.crop.width(), r.crop.height(), a.exposure.value_or(s.exposure));
 
   const bool full_frame = r.crop == PixelWindow{0, 0, s.width, s.height};
-  const double mpaths = double(r.paths) / std::max(r.session_seconds, 1e-9) / 1e6;
+  const double mpaths = double(r.paths.paths) / std::max(r.session_seconds, 1e-9) / 1e6;
   fmt::print(stderr, "{}: {} spp{}{} in {:.2f} s ({:.3f} M camera paths/s), wrote {} and {}{}\n",
              r.interrupted ? "interrupted" : "done", r.samples_done,
              r.range == SampleRange{0, r.samples_done} ? "" : fmt::format(" (samples {})", to_string(r.part.ranges)),

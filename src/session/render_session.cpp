@@ -75,12 +75,15 @@ void reduce_over_ranks(const RankGroup& g, const SampleRange& range, int done_he
   }
   // One slot per rank for what is gathered or maximised, then the sums (exact in doubles below 2^53).
   const size_t n = size_t(g.size);
-  std::vector<double> v(3 * n + 2, 0.0);
+  std::vector<double> v(3 * n + 5, 0.0);
   v[size_t(g.rank)] = done_here;
   v[n + size_t(g.rank)] = o.seconds;
   v[2 * n + size_t(g.rank)] = o.interrupted ? 1 : 0;
   v[3 * n] = double(o.nonfinite_samples);
-  v[3 * n + 1] = double(o.paths);
+  v[3 * n + 1] = double(o.paths.paths);
+  v[3 * n + 2] = double(o.paths.fluorescence_events);
+  v[3 * n + 3] = double(o.paths.excitation_rays);
+  v[3 * n + 4] = double(o.paths.excitation_continuations);
   g.sum_to_root(v);
   if (g.rank != 0) return;
   o.part.ranges.clear();
@@ -96,7 +99,7 @@ void reduce_over_ranks(const RankGroup& g, const SampleRange& range, int done_he
   }
   o.part.ranges = normalized(o.part.ranges);
   o.nonfinite_samples = uint64_t(v[3 * n]);
-  o.paths = uint64_t(v[3 * n + 1]);
+  o.paths = {uint64_t(v[3 * n + 1]), uint64_t(v[3 * n + 2]), uint64_t(v[3 * n + 3]), uint64_t(v[3 * n + 4])};
 }
 
 }  // namespace
@@ -213,7 +216,7 @@ RenderOutcome run_render_session(const Scene& scene, const RenderJob& job) {
   o.seconds = seconds_before + o.session_seconds;
   o.interrupted = (stats.interrupted && !o.stopped_by_rule) || polled;
   o.nonfinite_samples = nonfinite_before + o.film.nonfinite_samples();
-  o.paths = stats.paths.paths;
+  o.paths = stats.paths;
   o.part.ranges = {SampleRange{mine.begin, mine.begin + stats.samples_done}};
   if (g.size > 1) reduce_over_ranks(g, range, stats.samples_done, o);
   return o;

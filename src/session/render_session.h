@@ -67,7 +67,8 @@ struct RenderOutcome {
   bool stopped_by_rule = false;
   double seconds = 0;           // over all sessions of a resumed render (the slowest rank)
   double session_seconds = 0;   // this run's
-  uint64_t nonfinite_samples = 0, paths = 0;
+  uint64_t nonfinite_samples = 0;
+  PathStats paths{};  // summed over the ranks
   std::filesystem::path checkpoint{};  // this rank's file (empty: none)
   bool root() const { return rank == 0; }
   int rank = 0, ranks = 1;
