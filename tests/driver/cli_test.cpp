@@ -1,7 +1,8 @@
 // `chlorovdb render` / `merge` as a user runs them, in child processes: a render
 // killed with SIGKILL resumes from its checkpoint to the same image as an
 // uninterrupted run; Ctrl-C writes the image and a checkpoint; crops and sample
-// ranges merge into the single-run image; bad combinations are refused.
+// ranges merge into the single-run image; bad combinations are refused;
+// `reference` resumes bit for bit; `render --set` works in a read-only folder.
 #include <algorithm>
 #include <cmath>
 #include <cstring>
