@@ -1,11 +1,13 @@
-// Python bindings (issue 8, docs/python.md): load a scene, render it, get NumPy
-// arrays of every film layer (H x W x 3, float32) and of per-pixel spectra
-// (H x W x bins), write and read concentration grids, voxelize meshes.
+// Python bindings (docs/python.md): load a scene (read-only, or as an editable
+// document of its JSON that re-validates through the same loader), render it
+// through the render session the CLI uses, get NumPy arrays of every film layer
+// (H x W x 3, float32) and of per-pixel spectra (H x W x bins), write and read
+// concentration grids, voxelize meshes.
 //
 // Errors: chlorovdb.InputError (a ValueError) for bad input, carrying the
 // library's message (file, key, value, problem). Renders release the GIL and
-// honour Ctrl-C between passes (the completed passes are discarded and
-// KeyboardInterrupt is raised).
+// honour Ctrl-C between passes (a checkpoint, when asked for, is written with
+// the completed passes, then KeyboardInterrupt is raised).
 #include <pybind11/numpy.h>
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
@@ -19,10 +21,15 @@
 #include <optional>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
+#include "checkpoint/partition.h"
 #include "core/error.h"
 #include "grids/vdb_file.h"
 #include "integrator/render.h"
+#include "scene/param_reader.h"
 #include "scene/scene_loader.h"
+#include "session/render_session.h"
 #include "spectra/library.h"
 #ifdef CHLOROVDB_HAVE_VOXELIZE
 #include "geometry/mesh.h"
@@ -58,77 +65,150 @@ struct RenderResult {
   py::dict metadata;
 };
 
-RenderResult render_scene(const Scene& scene, std::optional<int> spp, int threads, std::optional<uint64_t> seed,
-                          std::optional<int> spectral_bins, int first_sample, std::optional<std::string> color_space) {
+// A scene file's JSON held for editing: `scene.media["solution"].pigments[0].concentration = 5`.
+// Every render (and check()) loads it through load_scene, so an edit is validated
+// exactly as the same key in a file, and relative paths resolve against `file`'s folder.
+// One object or array inside a document (shares the document's JSON).
+struct SceneNode {
+  std::shared_ptr<nlohmann::json> root;
+  nlohmann::json::json_pointer at;
+  nlohmann::json& value() const { return root->at(at); }
+};
+
+struct SceneDocument {
+  std::shared_ptr<nlohmann::json> json;
+  std::filesystem::path file;
+  SceneOverrides overrides;
+  Scene load() const { return load_scene(*json, file, overrides); }
+  SceneNode top() const { return SceneNode{json, nlohmann::json::json_pointer()}; }
+};
+
+nlohmann::json to_json(py::handle o) {
+  if (o.is_none()) return nullptr;
+  if (py::isinstance<py::bool_>(o)) return o.cast<bool>();
+  if (py::isinstance<py::int_>(o)) return o.cast<int64_t>();
+  if (py::isinstance<py::float_>(o)) return o.cast<double>();
+  if (py::isinstance<py::str>(o)) return o.cast<std::string>();
+  if (py::isinstance<SceneNode>(o)) return o.cast<const SceneNode&>().value();
+  if (py::isinstance<py::dict>(o)) {
+    nlohmann::json j = nlohmann::json::object();
+    for (auto [k, v] : o.cast<py::dict>()) j[py::str(k).cast<std::string>()] = to_json(v);
+    return j;
+  }
+  if (py::isinstance<py::array>(o)) return to_json(o.attr("tolist")());
+  if (py::isinstance<py::list>(o) || py::isinstance<py::tuple>(o)) {
+    nlohmann::json j = nlohmann::json::array();
+    for (py::handle v : o) j.push_back(to_json(v));
+    return j;
+  }
+  if (py::hasattr(o, "item")) return to_json(o.attr("item")());  // NumPy scalars
+  throw InputError("python", "value", py::repr(o).cast<std::string>(), "cannot be stored in a scene (use numbers, strings, lists, dicts)");
+}
+
+// Plain Python values for leaves, nodes for objects and arrays (so edits chain).
+py::object from_json(const SceneNode& parent, const nlohmann::json::json_pointer& at) {
+  const nlohmann::json& j = parent.root->at(at);
+  if (j.is_object() || j.is_array()) return py::cast(SceneNode{parent.root, at});
+  if (j.is_null()) return py::none();
+  if (j.is_boolean()) return py::bool_(j.get<bool>());
+  if (j.is_number_integer()) return py::int_(j.get<int64_t>());
+  if (j.is_number()) return py::float_(j.get<double>());
+  return py::str(j.get<std::string>());
+}
+
+py::object plain(const nlohmann::json& j) { return py::module_::import("json").attr("loads")(j.dump()); }
+
+nlohmann::json::json_pointer child(const SceneNode& n, py::handle key) {
+  const nlohmann::json& v = n.value();
+  if (v.is_array()) {
+    if (!py::isinstance<py::int_>(key)) throw py::type_error("a scene array is indexed by integers");
+    int64_t i = key.cast<int64_t>();
+    if (i < 0) i += int64_t(v.size());
+    if (i < 0 || i >= int64_t(v.size())) throw py::index_error("scene array index out of range");
+    return n.at / size_t(i);
+  }
+  return n.at / py::str(key).cast<std::string>();
+}
+
+py::object node_get(const SceneNode& n, py::handle key) {
+  const auto at = child(n, key);
+  if (n.value().is_object() && !n.value().contains(at.back())) throw py::key_error(py::str(key).cast<std::string>());
+  return from_json(n, at);
+}
+
+void node_set(const SceneNode& n, py::handle key, py::handle value) {
+  if (!n.value().is_object() && !n.value().is_array()) throw py::type_error("not an object or array");
+  n.root->operator[](child(n, key)) = to_json(value);
+}
+
+RenderResult render_scene(const Scene& scene, const std::string& scene_hash, std::optional<int> spp, int threads,
+                          std::optional<uint64_t> seed, std::optional<int> spectral_bins, int first_sample,
+                          std::optional<std::string> color_space, std::optional<std::filesystem::path> checkpoint,
+                          bool resume, double checkpoint_every) {
   const RenderSettings& s = scene.settings;
-  ColorSpace cs = s.color_space;
+  RenderJob job;
   if (color_space) {
-    if (*color_space == "srgb") cs = ColorSpace::sRGB;
-    else if (*color_space == "acescg") cs = ColorSpace::ACEScg;
+    if (*color_space == "srgb") job.color_space = ColorSpace::sRGB;
+    else if (*color_space == "acescg") job.color_space = ColorSpace::ACEScg;
     else throw InputError("render()", "color_space", *color_space, "must be \"srgb\" or \"acescg\"");
   }
   const int bins = spectral_bins.value_or(s.spectral_bins);
   if (bins < 0 || bins > 4096) throw InputError("render()", "spectral_bins", std::to_string(bins), "must be in [0, 4096]");
   if (threads < 0) throw InputError("render()", "threads", std::to_string(threads), "must be >= 0 (0: all cores)");
   if (first_sample < 0) throw InputError("render()", "first_sample", std::to_string(first_sample), "must be >= 0");
-  RenderOptions ro;
-  ro.spp = spp.value_or(s.spp);
-  if (ro.spp < 1) throw InputError("render()", "spp", std::to_string(ro.spp), "must be >= 1");
-  ro.threads = threads;
-  ro.seed = seed.value_or(s.seed);
-  ro.first_sample = first_sample;
-  std::atomic<bool> stop{false};
-  bool interrupted_by_signal = false;
-  ro.stop = &stop;
+  const int n = spp.value_or(s.spp);
+  if (n < 1) throw InputError("render()", "spp", std::to_string(n), "must be >= 1");
+  if (!(checkpoint_every >= 0)) throw InputError("render()", "checkpoint_every", std::to_string(checkpoint_every), "must be >= 0");
+  job.samples = SampleRange{first_sample, first_sample + n};
+  job.spectral_bins = bins;
+  job.threads = threads;
+  job.seed = seed;
+  job.scene_hash = scene_hash;
+  if (checkpoint) job.checkpoint = *checkpoint;
+  job.resume = resume;
+  job.checkpoint_every = checkpoint_every;
   // Between passes: give Python a chance to see Ctrl-C.
-  ro.on_pass = [&](int) {
+  job.poll_interrupt = [] {
     py::gil_scoped_acquire gil;
-    if (PyErr_CheckSignals() != 0) {
-      interrupted_by_signal = true;
-      stop = true;
-    }
+    return PyErr_CheckSignals() != 0;
   };
-
-  Film film(s.width, s.height, film_layer_names(), cs);
-  if (bins > 0) film.enable_spectral(kLambdaMin, kLambdaMax, bins);
-  RenderStats stats;
+  std::optional<RenderOutcome> outcome;
   {
     py::gil_scoped_release release;
-    stats = chlorovdb::render(scene, film, ro);
+    outcome = run_render_session(scene, job);
   }
-  if (interrupted_by_signal) throw py::error_already_set();
-  if (stats.samples_done == 0) throw std::runtime_error("render: no pass completed");
+  if (outcome->interrupted) throw py::error_already_set();
+  if (outcome->samples_done == 0) throw std::runtime_error("render: no pass completed");
 
-  const Image image = film.to_image(stats.samples_done);
+  const Image image = session_image(scene, job, *outcome);
   RenderResult r;
   r.width = image.width;
   r.height = image.height;
   for (const ImageLayer& layer : image.layers) {
-    const auto n = py::ssize_t(layer.channels.size());
+    const auto c = py::ssize_t(layer.channels.size());
     if (layer.name == "S0") {
-      r.spectral = to_array(layer.pixels, {image.height, image.width, n});
-      py::array_t<float> centres(n);
+      r.spectral = to_array(layer.pixels, {image.height, image.width, c});
+      py::array_t<float> centres(c);
       const double width_nm = (double(kLambdaMax) - kLambdaMin) / bins;
-      for (py::ssize_t b = 0; b < n; ++b) centres.mutable_at(b) = float(kLambdaMin + (b + 0.5) * width_nm);
+      for (py::ssize_t b = 0; b < c; ++b) centres.mutable_at(b) = float(kLambdaMin + (b + 0.5) * width_nm);
       r.wavelengths_nm = centres;
       r.bin_width_nm = width_nm;
     } else {
-      r.layers[py::str(layer.name)] = to_array(layer.pixels, {image.height, image.width, n});
+      r.layers[py::str(layer.name)] = to_array(layer.pixels, {image.height, image.width, c});
     }
   }
-  r.samples_per_pixel = stats.samples_done;
-  r.seconds = stats.seconds;
-  r.nonfinite_samples = film.nonfinite_samples();
-  r.paths = stats.paths;
+  r.samples_per_pixel = outcome->samples_done;
+  r.seconds = outcome->session_seconds;
+  r.nonfinite_samples = outcome->nonfinite_samples;
+  r.paths = outcome->paths;
   for (const auto& [key, value] : image.metadata.entries) r.metadata[py::str(key)] = metadata_value(value);
-  r.metadata["seed"] = ro.seed;
-  r.metadata["fluorescence"] = to_string(s.fluorescence);
+  r.metadata["seed"] = job_seed(scene, job);
   return r;
 }
 
-std::shared_ptr<Scene> load(const std::filesystem::path& file, std::optional<int> width, std::optional<int> height,
-                            std::optional<int> spp, std::optional<int> wavelengths, std::optional<uint64_t> seed,
-                            std::optional<std::string> fluorescence, std::optional<std::string> transmittance) {
+SceneOverrides overrides_from(std::optional<int> width, std::optional<int> height, std::optional<int> spp,
+                              std::optional<int> wavelengths, std::optional<uint64_t> seed,
+                              std::optional<std::string> fluorescence, std::optional<std::string> transmittance) {
   SceneOverrides o;
   auto positive = [](const char* key, std::optional<int> v, int hi) {
     if (v && (*v < 1 || *v > hi))
@@ -145,8 +225,19 @@ std::shared_ptr<Scene> load(const std::filesystem::path& file, std::optional<int
   o.seed = seed;
   o.fluorescence = fluorescence;
   o.transmittance = transmittance;
-  py::gil_scoped_release release;
-  return std::make_shared<Scene>(load_scene(file, o));
+  return o;
+}
+
+// `set`: {"media.solution.pigments[0].concentration": 5, ...}, applied in order.
+SceneDocument load_document(const std::filesystem::path& file, py::object sets, const SceneOverrides& o) {
+  SceneDocument d{std::make_shared<nlohmann::json>(ParamReader::parse_file(file)), file, o};
+  if (!sets.is_none())
+    for (auto [k, v] : sets.cast<py::dict>()) set_scene_key(*d.json, py::str(k).cast<std::string>(), to_json(v), "set=");
+  {
+    py::gil_scoped_release release;
+    d.load();  // validated now, so a bad file or edit fails at load()
+  }
+  return d;
 }
 
 // Dense copy of a grid's stored voxels: values[z][y][x] over [index_lo, index_hi].
@@ -365,17 +456,116 @@ PYBIND11_MODULE(chlorovdb, m) {
         return r.layers[py::str(layer)];
       });
 
-  m.def("load_scene", &load, py::arg("path"), py::kw_only(), py::arg("width") = py::none(),
-        py::arg("height") = py::none(), py::arg("spp") = py::none(), py::arg("wavelengths") = py::none(),
-        py::arg("seed") = py::none(), py::arg("fluorescence") = py::none(), py::arg("transmittance") = py::none(),
-        "Load a scene file (docs/scene-format.md); keyword arguments override its render settings, as the CLI's "
-        "options do. Raises chlorovdb.InputError naming file, key and value.");
+  py::class_<SceneNode>(m, "SceneNode",
+                                          "An object or array of an editable scene: index (or attribute) to read, assign to edit")
+      .def("__getitem__", &node_get)
+      .def("__setitem__", &node_set)
+      .def("__getattr__",
+           [](const SceneNode& n, const std::string& key) {
+             if (!n.value().is_object() || !n.value().contains(key)) throw py::attribute_error(key);
+             return from_json(n, n.at / key);
+           })
+      .def("__setattr__", [](const SceneNode& n, const std::string& key, py::object v) { node_set(n, py::str(key), v); })
+      .def("__len__", [](const SceneNode& n) { return n.value().size(); })
+      .def("__contains__", [](const SceneNode& n, const std::string& key) { return n.value().is_object() && n.value().contains(key); })
+      .def("keys", [](const SceneNode& n) {
+        std::vector<std::string> keys;
+        if (n.value().is_object())
+          for (const auto& [k, v] : n.value().items()) keys.push_back(k);
+        return keys;
+      })
+      .def("append", [](const SceneNode& n, py::object v) {
+        if (!n.value().is_array()) throw py::type_error("append() needs a scene array");
+        n.value().push_back(to_json(v));
+      })
+      .def("to_python", [](const SceneNode& n) { return plain(n.value()); }, "A plain copy (dicts, lists, numbers, strings)")
+      .def("__repr__", [](const SceneNode& n) { return n.value().dump(); });
 
-  m.def("render", &render_scene, py::arg("scene"), py::kw_only(), py::arg("spp") = py::none(),
-        py::arg("threads") = 0, py::arg("seed") = py::none(), py::arg("spectral_bins") = py::none(),
-        py::arg("first_sample") = 0, py::arg("color_space") = py::none(),
-        "Render `scene`; spp/seed/spectral_bins default to the scene's settings, threads = 0 uses every core. "
-        "The image depends only on the seed and the sample range, not on the thread count.");
+  py::class_<SceneDocument>(m, "SceneDocument",
+                            "A scene file's JSON held for editing; every render re-validates it through the scene loader")
+      .def_property_readonly("file", [](const SceneDocument& d) { return d.file; })
+      .def("__getitem__", [](const SceneDocument& d, py::object key) { return node_get(d.top(), key); })
+      .def("__setitem__", [](const SceneDocument& d, py::object key, py::object v) { node_set(d.top(), key, v); })
+      .def("__getattr__",
+           [](const SceneDocument& d, const std::string& key) {
+             if (!d.json->contains(key)) throw py::attribute_error(key);
+             return from_json(d.top(), nlohmann::json::json_pointer() / key);
+           })
+      .def("__setattr__", [](const SceneDocument& d, const std::string& key, py::object v) {
+        node_set(d.top(), py::str(key), v);
+      })
+      .def("set", [](const SceneDocument& d, const std::string& key, py::object v) { set_scene_key(*d.json, key, to_json(v), "set()"); },
+           py::arg("key"), py::arg("value"), "Set a dotted key path, as --set does: set(\"media.solution.pigments[0].concentration\", 5)")
+      .def("check", [](const SceneDocument& d) {
+        py::gil_scoped_release release;
+        return std::make_shared<Scene>(d.load());
+      }, "Load the document as it is now (raises InputError naming the key of a bad edit); returns a read-only Scene")
+      .def("to_python", [](const SceneDocument& d) { return plain(*d.json); }, "A plain copy of the JSON as dicts and lists")
+      .def("copy", [](const SceneDocument& d) {
+        return SceneDocument{std::make_shared<nlohmann::json>(*d.json), d.file, d.overrides};
+      }, "An independent copy to edit")
+      .def("__repr__", [](const SceneDocument& d) { return "<chlorovdb.SceneDocument " + d.file.string() + ">"; });
+
+  m.def(
+      "load_scene",
+      [](const std::filesystem::path& file, std::optional<int> width, std::optional<int> height, std::optional<int> spp,
+         std::optional<int> wavelengths, std::optional<uint64_t> seed, std::optional<std::string> fluorescence,
+         std::optional<std::string> transmittance) {
+        const SceneOverrides o = overrides_from(width, height, spp, wavelengths, seed, fluorescence, transmittance);
+        py::gil_scoped_release release;
+        return std::make_shared<Scene>(load_scene(file, o));
+      },
+      py::arg("path"), py::kw_only(), py::arg("width") = py::none(), py::arg("height") = py::none(),
+      py::arg("spp") = py::none(), py::arg("wavelengths") = py::none(), py::arg("seed") = py::none(),
+      py::arg("fluorescence") = py::none(), py::arg("transmittance") = py::none(),
+      "Load a scene file (docs/scene-format.md) read-only; keyword arguments override its render settings, as the "
+      "CLI's options do. Raises chlorovdb.InputError naming file, key and value.");
+
+  m.def(
+      "load",
+      [](const std::filesystem::path& file, py::object set, std::optional<int> width, std::optional<int> height,
+         std::optional<int> spp, std::optional<int> wavelengths, std::optional<uint64_t> seed,
+         std::optional<std::string> fluorescence, std::optional<std::string> transmittance) {
+        return load_document(file, set, overrides_from(width, height, spp, wavelengths, seed, fluorescence, transmittance));
+      },
+      py::arg("path"), py::kw_only(), py::arg("set") = py::none(), py::arg("width") = py::none(),
+      py::arg("height") = py::none(), py::arg("spp") = py::none(), py::arg("wavelengths") = py::none(),
+      py::arg("seed") = py::none(), py::arg("fluorescence") = py::none(), py::arg("transmittance") = py::none(),
+      "Load a scene file as an editable SceneDocument: set={\"key.path\": value} applies edits as --set does; "
+      "then scene.media[\"solution\"].pigments[0].concentration = 5 edits in place. Validated now and at every render.");
+
+  auto render_doc =
+      "Render `scene` (a Scene or a SceneDocument) through the render session the CLI uses; spp/seed/spectral_bins "
+      "default to the scene's settings, threads = 0 uses every core. The image depends only on the seed and the sample "
+      "range [first_sample, first_sample + spp), not on the thread count. checkpoint=PATH writes the film's exact sums "
+      "(also on Ctrl-C); resume=True continues from it.";
+  m.def(
+      "render",
+      [](const Scene& scene, std::optional<int> spp, int threads, std::optional<uint64_t> seed,
+         std::optional<int> spectral_bins, int first_sample, std::optional<std::string> color_space,
+         std::optional<std::filesystem::path> checkpoint, bool resume, double checkpoint_every) {
+        return render_scene(scene, checkpoint ? hash_file(scene.file) : std::string(), spp, threads, seed, spectral_bins,
+                            first_sample, color_space, checkpoint, resume, checkpoint_every);
+      },
+      py::arg("scene"), py::kw_only(), py::arg("spp") = py::none(), py::arg("threads") = 0, py::arg("seed") = py::none(),
+      py::arg("spectral_bins") = py::none(), py::arg("first_sample") = 0, py::arg("color_space") = py::none(),
+      py::arg("checkpoint") = py::none(), py::arg("resume") = false, py::arg("checkpoint_every") = 300.0, render_doc);
+  m.def(
+      "render",
+      [](const SceneDocument& doc, std::optional<int> spp, int threads, std::optional<uint64_t> seed,
+         std::optional<int> spectral_bins, int first_sample, std::optional<std::string> color_space,
+         std::optional<std::filesystem::path> checkpoint, bool resume, double checkpoint_every) {
+        std::optional<Scene> scene;
+        {
+          py::gil_scoped_release release;
+          scene.emplace(doc.load());
+        }
+        return render_scene(*scene, hash_text(doc.json->dump()), spp, threads, seed, spectral_bins, first_sample,
+                            color_space, checkpoint, resume, checkpoint_every);
+      },
+      py::arg("scene"), py::kw_only(), py::arg("spp") = py::none(), py::arg("threads") = 0, py::arg("seed") = py::none(),
+      py::arg("spectral_bins") = py::none(), py::arg("first_sample") = 0, py::arg("color_space") = py::none(),
+      py::arg("checkpoint") = py::none(), py::arg("resume") = false, py::arg("checkpoint_every") = 300.0, render_doc);
 
   m.def("spectrum_names", &spectrum_names, "Names of the shipped spectral tables");
   m.def("spectra_dir", &spectra_dir, "Folder the shipped spectral tables are read from (env CHLOROVDB_SPECTRA)");

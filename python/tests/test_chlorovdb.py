@@ -90,6 +90,76 @@ class ChlorovdbTest(unittest.TestCase):
         with self.assertRaises(chlorovdb.InputError):
             chlorovdb.load_scene(self.write_scene("ok", DYE_SCENE), spp=0)
 
+    def test_edit_a_scene_as_a_document_and_render_it(self):
+        path = self.write_scene("doc", DYE_SCENE)
+        scene = chlorovdb.load(path, set={"media.dye.pigments[0].concentration": 10, "render.spp": 2})
+        self.assertEqual(scene.media["dye"].pigments[0].concentration, 10)
+        self.assertEqual(scene.render.spp, 2)
+        scene.media["dye"].pigments[0].concentration = 5
+        self.assertEqual(scene.media["dye"].pigments[0]["concentration"], 5)
+        edited = chlorovdb.render(scene, threads=1, seed=4)
+
+        # The same edit written to a file renders the same image: one loader, one session.
+        changed = json.loads(json.dumps(DYE_SCENE))
+        changed["media"]["dye"]["pigments"][0]["concentration"] = 5
+        from_file = chlorovdb.render(chlorovdb.load_scene(self.write_scene("doc5", changed)), threads=1, seed=4)
+        for name in from_file.layers:
+            np.testing.assert_array_equal(edited[name], from_file[name], name)
+        # ... and differs from the unedited scene.
+        original = chlorovdb.render(chlorovdb.load_scene(path), threads=1, seed=4)
+        self.assertFalse(np.array_equal(original["fluorescence"], edited["fluorescence"]))
+        self.assertEqual(scene.to_python()["media"]["dye"]["pigments"][0]["concentration"], 5)
+
+        # A bad edit is refused by the loader with the key named, at render as at check().
+        scene.camera.fov = "wide"
+        with self.assertRaises(chlorovdb.InputError) as ctx:
+            chlorovdb.render(scene)
+        self.assertIn("camera.fov", str(ctx.exception))
+        with self.assertRaises(chlorovdb.InputError):
+            scene.check()
+        with self.assertRaises(chlorovdb.InputError) as ctx:
+            chlorovdb.load(path, set={"shapes[7].radius": 1})
+        self.assertIn("no element 7", str(ctx.exception))
+        with self.assertRaises(AttributeError):
+            scene.no_such_key
+
+    def test_document_paths_resolve_against_the_scene_folder(self):
+        folder = pathlib.Path(self.tmp.name) / "sub"
+        folder.mkdir()
+        (folder / "floor.obj").write_text("v -3 0 -3\nv 3 0 -3\nv 3 0 3\nv -3 0 3\nf 1 4 3\nf 1 3 2\n")
+        scene = json.loads(json.dumps(DYE_SCENE))
+        scene["shapes"][1] = {"type": "mesh", "file": "floor.obj", "material": "floor"}
+        path = folder / "mesh.json"
+        path.write_text(json.dumps(scene))
+        cwd = os.getcwd()
+        os.chdir(self.tmp.name)
+        try:
+            doc = chlorovdb.load("sub/mesh.json", set={"render.resolution": [4, 3]})
+            result = chlorovdb.render(doc, spp=1, threads=1)
+        finally:
+            os.chdir(cwd)
+        self.assertEqual(result["total"].shape, (3, 4, 3))
+
+    def test_render_checkpoint_resumes_to_the_uninterrupted_image(self):
+        scene = chlorovdb.load(self.write_scene("ckpt", DYE_SCENE))
+        ckpt = pathlib.Path(self.tmp.name) / "dye.ckpt"
+        first = chlorovdb.render(scene, spp=3, threads=1, seed=2, checkpoint=ckpt)
+        self.assertEqual(first.samples_per_pixel, 3)
+        self.assertTrue(ckpt.exists())
+        with self.assertRaises(chlorovdb.InputError):  # an existing checkpoint without resume=True
+            chlorovdb.render(scene, spp=3, threads=1, seed=2, checkpoint=ckpt)
+        # The session's checkpoint refuses another scene.
+        scene.media["dye"].pigments[0].concentration = 1
+        with self.assertRaises(chlorovdb.InputError) as ctx:
+            chlorovdb.render(scene, spp=6, threads=1, seed=2, checkpoint=ckpt, resume=True)
+        self.assertIn("scene_hash", str(ctx.exception))
+        scene.media["dye"].pigments[0].concentration = 20
+        resumed = chlorovdb.render(scene, spp=6, threads=1, seed=2, checkpoint=ckpt, resume=True)
+        whole = chlorovdb.render(scene, spp=6, threads=1, seed=2)
+        self.assertEqual(resumed.metadata["resumed_at_spp"], 3)
+        for name in whole.layers:
+            np.testing.assert_array_equal(resumed[name], whole[name], name)
+
     def test_render_layers_are_float32_hxwx3_and_add_up(self):
         scene = chlorovdb.load_scene(self.write_scene("dye", DYE_SCENE))
         result = chlorovdb.render(scene, spp=4, threads=1, seed=3)

@@ -1,6 +1,6 @@
 #pragma once
 // Analytic references: scenes whose exact image is known, for `chlorovdb
-// converge --analytic NAME` and the convergence tests (PHYSICS.md §7).
+// converge --analytic NAME` and the convergence tests (docs/physics.md §7).
 //
 // A slab of pigment solution 0 <= z <= D, index-matched (interface box),
 // lit at normal incidence by a distant light travelling along -z onto the face
@@ -14,7 +14,7 @@
 //   L(l) = Q f(l) / (4 pi) int dl' (l'/l) E(l') int_0^D mu_a(s, l') e^{-tau'(s)} e^{-zeta d(s)} ds
 //
 // with d(s) = s on the lit (reflection) side and D - s on the far (transmission)
-// side. For a uniform c this is PHYSICS.md §7's closed form; for a linear c(s)
+// side. For a uniform c this is docs/physics.md §7's closed form; for a linear c(s)
 // (a grid medium: trilinear interpolation reproduces a linear field exactly)
 // the inner integral is done by composite Simpson quadrature (relative error
 // below 1e-9), the l' integral by the trapezoid rule on a 0.01 nm grid.
@@ -53,7 +53,7 @@ struct SlabCase {
   std::string transmittance = "auto";
 };
 
-// "slab" (PHYSICS §7, homogeneous, lit side), "slab_transmission" (same, far
+// "slab" (docs/physics.md §7, homogeneous, lit side), "slab_transmission" (same, far
 // side) and "slab_linear" (grid medium, concentration linear in depth, lit side).
 std::vector<std::string> analytic_case_names();
 // Throws InputError listing the names for an unknown one.

@@ -1,11 +1,9 @@
 #pragma once
-// Rendering at increasing effort, on top of integrator/render.h:
-//  - convergence runs: one progressive render that stops at each requested
-//    sample count and time budget to measure the error against a reference;
-//  - references: a long render that checkpoints as it goes and resumes from
-//    its own partial output.
-// Both rely on render()'s determinism: sample s of pixel (x, y) depends only on
-// (seed, x, y, s), so rendering [0, a) then [a, b) gives the same samples as [0, b).
+// Convergence runs, on top of integrator/render.h: one progressive render that
+// stops at each requested sample count and time budget to measure the error
+// against a reference. It relies on render()'s determinism: sample s of pixel
+// (x, y) depends only on (seed, x, y, s), so rendering [0, a) then [a, b) gives
+// the same samples as [0, b). (References are render sessions: session/.)
 #include <atomic>
 #include <functional>
 #include <vector>
@@ -46,33 +44,5 @@ struct ConvergenceOptions {
 // requested sample count and time budget, in order of effort. Stops early
 // (returning the points so far) when *stop is set.
 std::vector<ConvergencePoint> run_convergence(const Scene& scene, const Image& reference, const ConvergenceOptions& options);
-
-struct ReferenceOptions {
-  int spp = 1024;                 // total samples per pixel wanted
-  int threads = 0;
-  uint64_t seed = 0;
-  double checkpoint_seconds = 60; // write at the first pass boundary after this much time since the last write (0: every pass)
-  const std::atomic<bool>* stop = nullptr;
-  bool show_progress = false;
-};
-
-struct ReferenceResult {
-  Image image;         // mean over spp_done samples
-  int spp_done = 0;
-  double seconds = 0;  // this session's rendering time
-  bool interrupted = false;
-};
-
-// Renders samples [previous_spp, options.spp) and averages them with `previous`
-// (the mean of samples [0, previous_spp), or nullptr when previous_spp = 0),
-// weighted by sample counts. `checkpoint(image, spp_done)` is called at the
-// checkpoint interval and once at the end with the combined mean so far.
-ReferenceResult continue_reference(const Scene& scene, const Image* previous, int previous_spp,
-                                   const ReferenceOptions& options,
-                                   const std::function<void(const Image&, int spp_done)>& checkpoint);
-
-// (n_a a + n_b b) / (n_a + n_b), layer by layer (layers of `a` matched by name
-// in `b`); metadata from `b`. Throws std::invalid_argument on a size or layer mismatch.
-Image combine_means(const Image& a, int n_a, const Image& b, int n_b);
 
 }  // namespace chlorovdb

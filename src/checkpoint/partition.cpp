@@ -148,16 +148,26 @@ PartInfo read_part_metadata(const Metadata& metadata, const std::filesystem::pat
   return part;
 }
 
+namespace {
+constexpr uint64_t kFnvBasis = 0xcbf29ce484222325ULL;
+uint64_t fnv1a(uint64_t h, const char* bytes, size_t n) {
+  for (size_t i = 0; i < n; ++i) h = (h ^ uint8_t(bytes[i])) * 0x100000001b3ULL;
+  return h;
+}
+}  // namespace
+
 std::string hash_file(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
   if (!in) throw InputError(file.string(), "", "", "cannot read the file to hash it");
-  uint64_t h = 0xcbf29ce484222325ULL;
+  uint64_t h = kFnvBasis;
   char buf[1 << 16];
   while (in) {
     in.read(buf, sizeof buf);
-    for (std::streamsize i = 0; i < in.gcount(); ++i) h = (h ^ uint8_t(buf[i])) * 0x100000001b3ULL;
+    h = fnv1a(h, buf, size_t(in.gcount()));
   }
   return fmt::format("{:016x}", h);
 }
+
+std::string hash_text(std::string_view text) { return fmt::format("{:016x}", fnv1a(kFnvBasis, text.data(), text.size())); }
 
 }  // namespace chlorovdb

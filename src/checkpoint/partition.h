@@ -68,5 +68,7 @@ PartInfo read_part_metadata(const Metadata& metadata, const std::filesystem::pat
 
 // 64-bit FNV-1a of a file's bytes as 16 hex digits (the scene hash of a signature).
 std::string hash_file(const std::filesystem::path& file);
+// The same of a string (a scene held in memory, or a file's hash plus its edits).
+std::string hash_text(std::string_view text);
 
 }  // namespace chlorovdb

@@ -1,9 +1,7 @@
 // `chlorovdb converge`: one progressive render measured against a reference
 // image or an analytic case at increasing effort -> CSV + log-log SVG plot.
 // docs/convergence.md explains the metrics and the analytic cases.
-#include <csignal>
 #include <fstream>
-#include <unistd.h>
 
 #include <fmt/format.h>
 
@@ -15,16 +13,11 @@
 #include "cli/commands.h"
 #include "core/error.h"
 #include "io/image.h"
+#include "session/interrupt.h"
 
 namespace chlorovdb::cli {
 
 namespace {
-
-std::atomic<bool> g_stop{false};
-
-extern "C" void on_converge_interrupt(int) {
-  if (g_stop.exchange(true)) _exit(130);
-}
 
 struct ConvergeArgs {
   std::filesystem::path scene;
@@ -118,7 +111,7 @@ int converge(const ConvergeArgs& a) {
     if (!a.scene.empty()) fmt::print(stderr, "note: --analytic {} defines its own scene; {} is ignored\n", a.analytic, a.scene.string());
     scene_file = write_slab_scene(*slab, std::filesystem::path(prefix.string() + "_scene"));
   }
-  const Scene scene = load_scene_variant(scene_file, o, a.sets);
+  const Scene scene = load_scene(scene_file, o, a.sets);
   const Image reference = slab ? slab_reference_image(*slab, scene) : read_exr(a.reference);
   if (reference.width != scene.settings.width || reference.height != scene.settings.height)
     throw InputError(a.reference.string(), "", fmt::format("{}x{}", reference.width, reference.height),
@@ -131,19 +124,17 @@ int converge(const ConvergeArgs& a) {
   co.clock = a.clock == "cpu" ? Clock::cpu : Clock::wall;
   co.threads = a.threads.value_or(0);
   co.seed = scene.settings.seed;
-  co.stop = &g_stop;
+  co.stop = &interrupt_requested();
   co.keep_images = a.save_images;
   co.on_point = [&](const ConvergencePoint& p) {
     const LayerError* t = find_error(p.errors, "total");
     fmt::print(stderr, "{:>6} spp  {:8.3f} s ({:.3f} s CPU)  RMSE(total) {:.4e}  relMSE {:.4e}\n", p.spp, p.seconds, p.cpu_seconds,
                t ? t->rmse : 0.0, t ? t->rel_mse : 0.0);
   };
-  g_stop = false;
-  std::signal(SIGINT, on_converge_interrupt);
-  std::signal(SIGTERM, on_converge_interrupt);
-  const std::vector<ConvergencePoint> points = run_convergence(scene, reference, co);
-  std::signal(SIGINT, SIG_DFL);
-  std::signal(SIGTERM, SIG_DFL);
+  const std::vector<ConvergencePoint> points = [&] {
+    InterruptScope interrupts;
+    return run_convergence(scene, reference, co);
+  }();
 
   // CSV: one row per point and layer.
   const std::filesystem::path csv = prefix.string() + ".csv";
@@ -199,7 +190,7 @@ int converge(const ConvergeArgs& a) {
   const std::filesystem::path svg = prefix.string() + ".svg";
   write_loglog_svg(svg, {vs_time, vs_spp, rel});
   fmt::print(stderr, "wrote {} and {}\n", csv.string(), svg.string());
-  return g_stop ? 130 : 0;
+  return interrupt_requested() ? 130 : 0;
 }
 
 }  // namespace

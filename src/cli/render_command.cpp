@@ -1,6 +1,7 @@
-// `chlorovdb render`: load, render progressively, write EXR + PNG. Ctrl-C
-// (or SIGTERM) stops after the current pass's tiles and still writes the
-// completed passes, and a checkpoint when --checkpoint is given.
+// `chlorovdb render`: load (with --set edits), run the render session
+// (session/render_session.h), write EXR + PNG. Ctrl-C (or SIGTERM) stops after
+// the current pass's tiles and still writes the completed passes, and a
+// checkpoint when --checkpoint is given.
 //
 // Partial renders (docs/distributed.md): --crop renders a pixel window (the EXR
 // has the crop's size; metadata gives its place), --sample-range A:B renders
@@ -9,10 +10,7 @@
 //
 // Built a second time as `chlorovdb-mpi` (CHLOROVDB_MPI=ON, -DCHLOROVDB_MPI_MAIN):
 // the ranks split the sample range and reduce the film sums to rank 0.
-#include <chrono>
-#include <csignal>
 #include <cstdio>
-#include <unistd.h>
 
 #include <fmt/format.h>
 
@@ -20,31 +18,21 @@
 #include <mpi.h>
 #endif
 
-#include "checkpoint/checkpoint.h"
 #include "checkpoint/partition.h"
 #include "analysis/scene_variant.h"
 #include "cli/commands.h"
 #include "core/error.h"
-#include "integrator/render.h"
 #include "io/image.h"
 #include "scene/scene_loader.h"
+#include "session/interrupt.h"
+#include "session/render_session.h"
 
 namespace chlorovdb::cli {
 
 namespace {
 
-std::atomic<bool> g_stop{false};
-
-// This process's share of the work: rank r of `size` renders the r-th slice of the sample range.
-struct Distribution {
-  int rank = 0, size = 1;
-};
-Distribution g_dist;
-
-extern "C" void on_interrupt(int) {
-  // A second Ctrl-C means "now": leave without writing.
-  if (g_stop.exchange(true)) _exit(130);
-}
+// This process's share of the work (set by the MPI main).
+RankGroup g_ranks;
 
 struct RenderArgs {
   std::filesystem::path scene;
@@ -55,6 +43,7 @@ struct RenderArgs {
   std::optional<float> exposure;
   std::optional<std::string> fluorescence, transmittance;
   std::optional<std::string> crop, sample_range;  // "x0,y0,x1,y1", "A:B"
+  std::vector<std::string> sets;                  // --set KEY=VALUE
   std::filesystem::path checkpoint;
   double checkpoint_every = 300;
   bool resume = false;
@@ -95,6 +84,7 @@ Command add_render_command(CLI::App& app) {
                 "Continue from --checkpoint if it exists (start fresh if not); refused when the scene file, seed, size, "
                 "crop or settings differ")
       ->needs(ckpt);
+  sub->add_option("--set", r.sets, "KEY=VALUE: change any scene key, e.g. media.solution.pigments[0].concentration=5 (repeatable)");
   sub->add_flag("-q,--quiet", r.quiet, "No progress bar");
   return {sub, [args] { return render(*args); }};
 }
@@ -104,61 +94,18 @@ namespace {
 #ifdef CHLOROVDB_MPI_MAIN
 // Sums `v` over the ranks into rank 0 (in chunks: MPI counts are int).
 void reduce_sum(std::vector<double>& v) {
-  std::vector<double> out(g_dist.rank == 0 ? v.size() : 0);
+  const bool root = g_ranks.rank == 0;
+  std::vector<double> out(root ? v.size() : 0);
   constexpr size_t kChunk = size_t(1) << 26;
   for (size_t off = 0; off < v.size(); off += kChunk) {
     const int n = int(std::min(kChunk, v.size() - off));
-    MPI_Reduce(v.data() + off, g_dist.rank == 0 ? out.data() + off : nullptr, n, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD);
+    MPI_Reduce(v.data() + off, root ? out.data() + off : nullptr, n, MPI_DOUBLE, MPI_SUM, 0, MPI_COMM_WORLD);
   }
-  if (g_dist.rank == 0) v = std::move(out);
+  if (root) v = std::move(out);
 }
 #endif
 
-// The scene file's content and every setting that changes the image: parts
-// and checkpoints must agree on all of them.
-Signature make_signature(const RenderArgs& a, const Scene& scene) {
-  const RenderSettings& s = scene.settings;
-  return {
-      {"scene_hash", hash_file(a.scene)},
-      {"seed", std::to_string(s.seed)},
-      {"wavelengths", std::to_string(s.wavelengths)},
-      {"max_depth", std::to_string(s.max_depth)},
-      {"fluorescence", to_string(s.fluorescence)},
-      {"transmittance", s.transmittance_auto ? std::string("auto") : std::string(to_string(s.transmittance))},
-      {"color_space", s.color_space == ColorSpace::sRGB ? "sRGB" : "ACEScg"},
-      {"spectral_bins", std::to_string(s.spectral_bins)},
-  };
-}
-
-// Refuses a checkpoint that another scene, seed, size, crop or range produced.
-void check_resumable(const std::filesystem::path& file, const CheckpointHeader& h, const Film& saved, const PartInfo& now,
-                     const SampleRange& range, const Film& film) {
-  const std::string f = file.string();
-  const char* hint = "refusing to resume: use the same scene file and options, or another --checkpoint file";
-  if (h.full_width != now.full_width || h.full_height != now.full_height)
-    throw InputError(f, "resolution", fmt::format("{}x{}", h.full_width, h.full_height),
-                     fmt::format("the checkpoint's image size differs from this render's {}x{}: {}", now.full_width,
-                                 now.full_height, hint));
-  if (h.crop != now.crop)
-    throw InputError(f, "crop", to_string(h.crop), fmt::format("differs from this render's --crop {}: {}", to_string(now.crop), hint));
-  if (h.sample_first != range.begin)
-    throw InputError(f, "sample_first", std::to_string(h.sample_first),
-                     fmt::format("differs from this render's first sample {}: {}", range.begin, hint));
-  if (const auto d = signature_difference(h.signature, now.signature))
-    throw InputError(f, d->key, d->a,
-                     fmt::format("the checkpoint was rendered with {} = {}, this render has {} = {}{}: {}", d->key, d->a,
-                                 d->key, d->b, d->key == "scene_hash" ? " (the scene file changed)" : "", hint));
-  if (saved.layer_names() != film.layer_names() || saved.spectral_bins() != film.spectral_bins() ||
-      saved.color_space() != film.color_space())
-    throw InputError(f, "layers", "", fmt::format("the checkpoint's film layers differ from this build's: {}", hint));
-  if (h.samples_done > range.size())
-    throw InputError(f, "samples_done", std::to_string(h.samples_done),
-                     fmt::format("the checkpoint already holds more samples than this render's {}: {}", range.size(), hint));
-}
-
 int render(const RenderArgs& a) {
-  const Distribution dist = g_dist;
-  const bool root = dist.rank == 0;
   SceneOverrides o;
   o.spp = a.spp;
   o.seed = a.seed;
@@ -166,19 +113,20 @@ int render(const RenderArgs& a) {
   o.fluorescence = a.fluorescence;
   o.transmittance = a.transmittance;
   if (a.resolution) parse_resolution(*a.resolution, o);
-  std::optional<SampleRange> requested;
-  if (a.sample_range) requested = parse_sample_range(*a.sample_range);
-  const Scene scene = load_scene(a.scene, o);
+  RenderJob job;
+  if (a.sample_range) job.samples = parse_sample_range(*a.sample_range);
+  const Scene scene = load_scene(a.scene, o, a.sets);
   const RenderSettings& s = scene.settings;
-  const PixelWindow crop = a.crop ? parse_crop(*a.crop, s.width, s.height) : PixelWindow{0, 0, s.width, s.height};
-  const SampleRange range = requested.value_or(SampleRange{0, s.spp});
-  // This rank's slice of the range (the whole range without MPI).
-  auto slice = [&](int r) {
-    const int64_t n = range.size();
-    return SampleRange{range.begin + int(n * r / dist.size), range.begin + int(n * (r + 1) / dist.size)};
-  };
-  const SampleRange mine = slice(dist.rank);
-  const bool full_frame = crop == PixelWindow{0, 0, s.width, s.height};
+  if (a.crop) job.crop = parse_crop(*a.crop, s.width, s.height);
+  job.threads = a.threads.value_or(0);
+  job.show_progress = !a.quiet;
+  job.scene_hash = scene_hash(a.scene, a.sets);
+  job.checkpoint = a.checkpoint;
+  job.checkpoint_every = a.checkpoint_every;
+  job.resume = a.resume;
+  job.interrupt = &interrupt_requested();
+  job.ranks = g_ranks;
+  const bool root = job.ranks.rank == 0;
 
   std::filesystem::path out = a.output.empty() ? std::filesystem::path(a.scene.stem().string() + ".exr") : a.output;
   if (out.extension() != ".exr") out += ".exr";
@@ -186,162 +134,31 @@ int render(const RenderArgs& a) {
   std::filesystem::path png = out;
   png.replace_extension(".png");
 
-  PartInfo part{s.width, s.height, crop, {}, make_signature(a, scene)};
-  Film film(crop.width(), crop.height(), film_layer_names(), s.color_space);
-  if (s.spectral_bins > 0) film.enable_spectral(kLambdaMin, kLambdaMax, s.spectral_bins);
-
-  // Checkpoint: one file per rank under MPI.
-  std::filesystem::path ckpt = a.checkpoint;
-  if (!ckpt.empty() && dist.size > 1) ckpt += fmt::format(".rank{}of{}", dist.rank, dist.size);
-  CheckpointHeader header{CHLOROVDB_VERSION, std::filesystem::absolute(a.scene).string(), s.width, s.height, crop,
-                          mine.begin, mine.end, 0, part.signature, 0, 0};
-  int resumed_at = 0;
-  uint64_t nonfinite_before = 0;
-  double seconds_before = 0;
-  if (!ckpt.empty() && std::filesystem::exists(ckpt)) {
-    if (!a.resume)
-      throw InputError(ckpt.string(), "--checkpoint", "",
-                       "exists: pass --resume to continue it, or remove it (or choose another file) to start over");
-    CheckpointHeader saved;
-    Film restored = read_checkpoint(ckpt, &saved);
-    check_resumable(ckpt, saved, restored, part, mine, film);
-    film = std::move(restored);
-    resumed_at = saved.samples_done;
-    nonfinite_before = saved.nonfinite_samples;
-    seconds_before = saved.wall_time_s;
-    if (saved.chlorovdb_version != CHLOROVDB_VERSION)
-      fmt::print(stderr, "warning: {} was written by chlorovdb {}, this is {}: the result may differ from one run\n",
-                 ckpt.string(), saved.chlorovdb_version, CHLOROVDB_VERSION);
-    fmt::print(stderr, "{}resuming {} at sample {} of [{}, {})\n", dist.size > 1 ? fmt::format("rank {}: ", dist.rank) : "",
-               ckpt.string(), mine.begin + resumed_at, mine.begin, mine.end);
-  } else if (a.resume) {
-    fmt::print(stderr, "{}no checkpoint {} yet: starting from the first sample\n",
-               dist.size > 1 ? fmt::format("rank {}: ", dist.rank) : "", ckpt.string());
-  }
-
-  if (root)
-    for (const std::string& w : scene.warnings) fmt::print(stderr, "warning: {}\n", w);
-  if (root)
-    for (const std::string& n : scene.notes) fmt::print(stderr, "note: {}\n", n);
   if (root && scene.has_fluorescence())
     fmt::print(stderr, "fluorescence: {} ({})\n", to_string(s.fluorescence), s.fluorescence_reason);
-
-  const auto session_start = std::chrono::steady_clock::now();
-  auto session_seconds = [&] { return std::chrono::duration<double>(std::chrono::steady_clock::now() - session_start).count(); };
-  int saved_done = resumed_at;
-  auto save = [&](int done) {
-    header.samples_done = done;
-    header.nonfinite_samples = nonfinite_before + film.nonfinite_samples();
-    header.wall_time_s = seconds_before + session_seconds();
-    write_checkpoint(ckpt, header, film);
-    saved_done = done;
-  };
-  auto last_save = std::chrono::steady_clock::now();
-
-  g_stop = false;
-  std::signal(SIGINT, on_interrupt);
-  std::signal(SIGTERM, on_interrupt);
-  RenderOptions ro;
-  ro.first_sample = mine.begin;
-  ro.spp = mine.size();
-  ro.samples_done = resumed_at;
-  ro.film_x0 = crop.x0;
-  ro.film_y0 = crop.y0;
-  ro.threads = a.threads.value_or(0);
-  ro.seed = s.seed;
-  ro.stop = &g_stop;
-  ro.show_progress = !a.quiet && root;
-  if (!ckpt.empty())
-    ro.on_pass = [&](int done) {
-      const auto now = std::chrono::steady_clock::now();
-      if (done < ro.spp && std::chrono::duration<double>(now - last_save).count() >= a.checkpoint_every) {
-        save(done);
-        last_save = now;
-      }
-    };
-  RenderStats stats;
-  if (mine.size() > 0) stats = chlorovdb::render(scene, film, ro);
-  std::signal(SIGINT, SIG_DFL);
-  std::signal(SIGTERM, SIG_DFL);
-  // Final (or interrupted) state, so a completed part also leaves its exact sums.
-  if (!ckpt.empty() && stats.samples_done > 0 && stats.samples_done != saved_done) save(stats.samples_done);
-
-  int total_done = stats.samples_done;
-  uint64_t nonfinite = nonfinite_before + film.nonfinite_samples();
-  double seconds = seconds_before + session_seconds();
-  bool interrupted = stats.interrupted;
-  part.ranges = {SampleRange{mine.begin, mine.begin + stats.samples_done}};
-  uint64_t paths = stats.paths.paths;
-#ifdef CHLOROVDB_MPI_MAIN
-  if (dist.size > 1) {
-    for (size_t l = 0; l < film.layer_names().size(); ++l) {
-      std::vector<double> v = film.raw_xyz(int(l));
-      reduce_sum(v);
-      if (root) set_raw_sums(film, int(l), v);
-    }
-    if (film.spectral_bins() > 0) {
-      std::vector<double> v = film.raw_spectral();
-      reduce_sum(v);
-      if (root) set_raw_spectral(film, v);
-    }
-    std::vector<int> done(size_t(dist.size), 0);
-    MPI_Gather(&stats.samples_done, 1, MPI_INT, done.data(), 1, MPI_INT, 0, MPI_COMM_WORLD);
-    const uint64_t mine_nonfinite = nonfinite, mine_paths = paths;
-    MPI_Reduce(&mine_nonfinite, &nonfinite, 1, MPI_UINT64_T, MPI_SUM, 0, MPI_COMM_WORLD);
-    MPI_Reduce(&mine_paths, &paths, 1, MPI_UINT64_T, MPI_SUM, 0, MPI_COMM_WORLD);
-    const double mine_seconds = seconds;
-    MPI_Reduce(&mine_seconds, &seconds, 1, MPI_DOUBLE, MPI_MAX, 0, MPI_COMM_WORLD);
-    const int mine_interrupted = interrupted;
-    int any_interrupted = 0;
-    MPI_Reduce(&mine_interrupted, &any_interrupted, 1, MPI_INT, MPI_MAX, 0, MPI_COMM_WORLD);
-    if (!root) return interrupted ? 130 : 0;
-    interrupted = any_interrupted;
-    part.ranges.clear();
-    total_done = 0;
-    for (int r = 0; r < dist.size; ++r) {
-      part.ranges.push_back({slice(r).begin, slice(r).begin + done[size_t(r)]});
-      total_done += done[size_t(r)];
-    }
-    part.ranges = normalized(part.ranges);
-  }
-#endif
-
-  if (total_done == 0) {
+  RenderOutcome r = [&] {
+    InterruptScope interrupts;
+    return run_render_session(scene, job);
+  }();
+  if (!r.root()) return r.interrupted ? 130 : 0;
+  if (r.samples_done == 0) {
     fmt::print(stderr, "interrupted before the first pass completed: nothing written\n");
     return 130;
   }
-  Image image = film.to_image(total_done);
-  image.metadata.set("spp", total_done);
-  image.metadata.set("spp_requested", range.size());
-  image.metadata.set("sample_first", range.begin);
-  image.metadata.set("seed", std::to_string(s.seed));  // a string keeps all 64 bits
-  image.metadata.set("wall_time_s", seconds);
-  image.metadata.set("version", CHLOROVDB_VERSION);
-  image.metadata.set("scene", std::filesystem::absolute(a.scene).string());
-  image.metadata.set("wavelengths_per_path", s.wavelengths);
-  image.metadata.set("fluorescence", to_string(s.fluorescence));
-  {  // the majorant cell edge each grid medium chose (media/medium.cpp), for benchmarks
-    std::string cells;
-    for (const Medium& m : scene.media)
-      if (!m.homogeneous()) cells += fmt::format("{}{}", cells.empty() ? "" : " ", m.majorant_grid().voxels_per_cell());
-    if (!cells.empty()) image.metadata.set("majorant_cell_voxels", cells);
-  }
-  image.metadata.set("interrupted", interrupted ? 1 : 0);
-  image.metadata.set("nonfinite_samples", double(nonfinite));  // including sessions before a resume
-  if (resumed_at > 0) image.metadata.set("resumed_at_spp", resumed_at);
-  if (dist.size > 1) image.metadata.set("mpi_ranks", dist.size);
-  set_part_metadata(image.metadata, part);
+  const Image image = session_image(scene, job, r);
   write_exr(out, image);
-  write_png(png, image.layers[0], crop.width(), crop.height(), a.exposure.value_or(s.exposure));
+  write_png(png, image.layers[0], r.crop.width(), r.crop.height(), a.exposure.value_or(s.exposure));
 
-  const double mpaths = double(paths) / std::max(seconds - seconds_before, 1e-9) / 1e6;
+  const bool full_frame = r.crop == PixelWindow{0, 0, s.width, s.height};
+  const double mpaths = double(r.paths.paths) / std::max(r.session_seconds, 1e-9) / 1e6;
   fmt::print(stderr, "{}: {} spp{}{} in {:.2f} s ({:.3f} M camera paths/s), wrote {} and {}{}\n",
-             interrupted ? "interrupted" : "done", total_done,
-             range == SampleRange{0, total_done} ? "" : fmt::format(" (samples {})", to_string(part.ranges)),
-             full_frame ? "" : fmt::format(" of crop {}", to_string(crop)), seconds, mpaths, out.string(), png.string(),
-             ckpt.empty() ? "" : fmt::format(" (checkpoint {})", dist.size > 1 ? a.checkpoint.string() + ".rank*" : ckpt.string()));
-  if (nonfinite > 0) fmt::print(stderr, "warning: {} non-finite samples were dropped\n", nonfinite);
-  return interrupted ? 130 : 0;
+             r.interrupted ? "interrupted" : "done", r.samples_done,
+             r.range == SampleRange{0, r.samples_done} ? "" : fmt::format(" (samples {})", to_string(r.part.ranges)),
+             full_frame ? "" : fmt::format(" of crop {}", to_string(r.crop)), r.seconds, mpaths, out.string(), png.string(),
+             a.checkpoint.empty() ? ""
+                                  : fmt::format(" (checkpoint {})", r.ranks > 1 ? a.checkpoint.string() + ".rank*" : r.checkpoint.string()));
+  if (r.nonfinite_samples > 0) fmt::print(stderr, "warning: {} non-finite samples were dropped\n", r.nonfinite_samples);
+  return r.interrupted ? 130 : 0;
 }
 
 }  // namespace
@@ -351,8 +168,10 @@ int render(const RenderArgs& a) {
 // chlorovdb-mpi: `mpirun -np N chlorovdb-mpi render SCENE.json [render options]`.
 int main(int argc, char** argv) {
   MPI_Init(&argc, &argv);
-  MPI_Comm_rank(MPI_COMM_WORLD, &chlorovdb::cli::g_dist.rank);
-  MPI_Comm_size(MPI_COMM_WORLD, &chlorovdb::cli::g_dist.size);
+  chlorovdb::RankGroup& ranks = chlorovdb::cli::g_ranks;
+  MPI_Comm_rank(MPI_COMM_WORLD, &ranks.rank);
+  MPI_Comm_size(MPI_COMM_WORLD, &ranks.size);
+  ranks.sum_to_root = chlorovdb::cli::reduce_sum;
   CLI::App app{"chlorovdb-mpi: `render` with the samples split over MPI ranks and the film reduced to rank 0"};
   app.set_version_flag("--version", std::string("chlorovdb-mpi ") + CHLOROVDB_VERSION);
   app.require_subcommand(1);
@@ -361,7 +180,7 @@ int main(int argc, char** argv) {
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
-    code = chlorovdb::cli::g_dist.rank == 0 ? app.exit(e) : e.get_exit_code();
+    code = ranks.rank == 0 ? app.exit(e) : e.get_exit_code();
     MPI_Finalize();
     return code;
   }
@@ -370,7 +189,7 @@ int main(int argc, char** argv) {
   } catch (const std::exception& e) {
     // Another rank may be waiting in a collective: take the whole job down.
     const bool input = dynamic_cast<const chlorovdb::InputError*>(&e) != nullptr;
-    fmt::print(stderr, "chlorovdb-mpi (rank {}): {}: {}\n", chlorovdb::cli::g_dist.rank, input ? "error" : "internal error",
+    fmt::print(stderr, "chlorovdb-mpi (rank {}): {}: {}\n", ranks.rank, input ? "error" : "internal error",
                e.what());
     MPI_Abort(MPI_COMM_WORLD, input ? 1 : 3);
   }

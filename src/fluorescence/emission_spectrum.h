@@ -1,6 +1,6 @@
 #pragma once
 // Fluorescence emission spectra f(λ), normalised to unit integral per nm
-// (PHYSICS.md §3–§4). Three sources a user can pick: the mirror-image rule
+// (docs/physics.md §3–§4). Three sources a user can pick: the mirror-image rule
 // applied to the pigment's own absorption table, the ocean-optics Gaussian,
 // or a measured table.
 #include "spectra/spectrum.h"

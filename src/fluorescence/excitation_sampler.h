@@ -1,6 +1,6 @@
 #pragma once
 // Importance sampling of the excitation wavelength λ' for one (light, pigment)
-// pair, with density proportional to  S_light(λ') · ε(λ') · λ'  (PHYSICS.md §5.3):
+// pair, with density proportional to  S_light(λ') · ε(λ') · λ'  (docs/physics.md §5.3):
 // the light's photon flux times the pigment's absorption. The integral of that
 // product, `total()`, also tells how strongly a light can excite a pigment: a
 // light with total() == 0 never needs an excitation ray for that pigment.

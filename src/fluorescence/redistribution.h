@@ -1,6 +1,6 @@
 #pragma once
 // Redistribution weight w(λ', λ) between excitation λ' and emission λ
-// (PHYSICS.md §3). Kasha–Vavilov: w = 1 (photons conserved, emission shape
+// (docs/physics.md §3). Kasha–Vavilov: w = 1 (photons conserved, emission shape
 // independent of λ'). Stokes: only λ' < λ excites, renormalised by
 // F(λ') = ∫_{λ>λ'} f(λ) dλ so Q still means photons out per photon in.
 #include <vector>

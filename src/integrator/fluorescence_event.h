@@ -1,5 +1,5 @@
 #pragma once
-// The fluorescence source term (PHYSICS.md §3) along a camera path.
+// The fluorescence source term (docs/physics.md §3) along a camera path.
 #include "core/rng.h"
 #include "integrator/path_tracer.h"
 #include "integrator/transport.h"
@@ -20,7 +20,7 @@ SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, 
                                             PreparedMedia& media, Rng& rng, PathStats& stats, int depth,
                                             int* continuations);
 
-// The thesis's estimator (PHYSICS.md §5), kept to measure its bias and cost:
+// The thesis's estimator (docs/physics.md §5), kept to measure its bias and cost:
 // called when the hero wavelength is absorbed at `p`; with probability Q it
 // becomes a fluorescence event that samples λ_e uniformly below λ within the
 // light's support and tests one free path toward the light. Neither

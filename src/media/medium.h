@@ -1,7 +1,7 @@
 #pragma once
 // A participating medium: a solvent, up to kMaxPigments dissolved pigments
 // (each a concentration grid or a constant) and optional particle scattering
-// (a grid or a constant, with its own phase function). PHYSICS.md §1, §2, §6:
+// (a grid or a constant, with its own phase function). docs/physics.md §1, §2, §6:
 //   sigma_a(x, l) = zeta_solvent(l) + sum_k 100 ln10 eps_k(l) c_k(x)
 //   sigma_s(x, l) = sigma_s,Rayleigh(l) + sigma_s,particle(x)
 // Units: concentrations mol/L, coefficients 1/m, lengths metres.
@@ -98,7 +98,7 @@ struct PreparedMedium {
   // solvent): transmittance is then tracked on one lane (tracking/transmittance.cpp).
   bool grey = false;
 
-  // Per-wavelength bounds of sigma_t over a majorant segment (PHYSICS §6):
+  // Per-wavelength bounds of sigma_t over a majorant segment (docs/physics.md §6):
   // sigma_maj = zeta + 100 ln10 sum_k eps_k c_max,k + sigma_s,max; sigma_min likewise with c_min.
   // `lanes`: the first lanes to compute (the others come out 0); all carried lanes by default.
   SampledSpectrum sigma_maj(const MajorantSegment& s, int channels, int lanes) const {

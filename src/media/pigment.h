@@ -1,6 +1,6 @@
 #pragma once
 // A pigment: what it absorbs (decadic molar extinction) and, if fluorescent,
-// what it emits and how efficiently (PHYSICS.md §1, §3).
+// what it emits and how efficiently (docs/physics.md §1, §3).
 #include <string>
 #include <string_view>
 

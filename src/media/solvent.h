@@ -1,6 +1,6 @@
 #pragma once
 // The liquid the pigments are dissolved in: its absorption and its molecular
-// (Rayleigh / Einstein-Smoluchowski) scattering, PHYSICS.md §2.
+// (Rayleigh / Einstein-Smoluchowski) scattering, docs/physics.md §2.
 #include "spectra/spectrum.h"
 
 namespace chlorovdb {

@@ -357,8 +357,61 @@ void setup_fluorescence(Scene& scene, const std::string& mode) {
 
 }  // namespace
 
+void set_scene_key(nlohmann::json& json, std::string_view key_view, nlohmann::json value, std::string_view where) {
+  const std::string key(key_view), w(where);
+  nlohmann::json* node = &json;
+  size_t start = 0;
+  while (start <= key.size()) {
+    size_t end = key.find('.', start);
+    if (end == std::string::npos) end = key.size();
+    std::string part = key.substr(start, end - start);
+    std::optional<size_t> index;
+    if (const size_t open = part.find('['); open != std::string::npos) {
+      const std::string digits = part.size() > open + 2 ? part.substr(open + 1, part.size() - open - 2) : "";
+      if (part.back() != ']' || digits.empty() || digits.find_first_not_of("0123456789") != std::string::npos ||
+          digits.size() > 9)
+        throw InputError("command line", w, key, "malformed index in \"" + part + "\"");
+      index = std::stoul(digits);
+      part = part.substr(0, open);
+    }
+    if (part.empty()) throw InputError("command line", w, key, "empty key component");
+    if (!node->is_object()) throw InputError("command line", w, key, "\"" + part + "\" is not inside an object");
+    node = &(*node)[part];
+    if (index) {
+      if (!node->is_array() || *index >= node->size())
+        throw InputError("command line", w, key, fmt::format("\"{}\" has no element {}", part, *index));
+      node = &(*node)[*index];
+    }
+    start = end + 1;
+  }
+  *node = std::move(value);
+}
+
+void apply_scene_set(nlohmann::json& json, std::string_view key_equals_value) {
+  const std::string set(key_equals_value);
+  const size_t eq = set.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw InputError("command line", "--set", set, "expected KEY=VALUE, e.g. render.skip_unneeded_work=false");
+  const std::string key = set.substr(0, eq), text = set.substr(eq + 1);
+  // An array or object must be valid JSON (checked like a scene file: no
+  // duplicate keys, bounded nesting); any other word that is not JSON is a string.
+  nlohmann::json value;
+  if (!text.empty() && (text[0] == '[' || text[0] == '{')) value = ParamReader::parse_text(text, "command line: --set " + key);
+  else if (value = nlohmann::json::parse(text, nullptr, false); value.is_discarded()) value = text;
+  set_scene_key(json, std::string_view(set).substr(0, eq), std::move(value), "--set");
+}
+
 Scene load_scene(const std::filesystem::path& file, const SceneOverrides& overrides) {
-  const nlohmann::json json = ParamReader::parse_file(file);
+  return load_scene(ParamReader::parse_file(file), file, overrides);
+}
+
+Scene load_scene(const std::filesystem::path& file, const SceneOverrides& overrides, std::span<const std::string> sets) {
+  nlohmann::json json = ParamReader::parse_file(file);
+  for (const std::string& s : sets) apply_scene_set(json, s);
+  return load_scene(json, file, overrides);
+}
+
+Scene load_scene(const nlohmann::json& json, const std::filesystem::path& file, const SceneOverrides& overrides) {
   ParamReader top(json, file, "");
   const float unit = length_unit_in_metres(top);
   std::string fluorescence_mode, transmittance;

@@ -66,10 +66,3 @@ TEST(SvgPlot, WritesOnePolylinePerSeriesAndTheGuide) {
   EXPECT_NE(svg.find("</svg>"), std::string::npos);
 }
 
-TEST(CombineMeans, WeightsBySampleCounts) {
-  const Image a = flat_image(2, 2, {{"total", 1.f}});
-  const Image b = flat_image(2, 2, {{"total", 4.f}});
-  const Image c = combine_means(a, 3, b, 1);
-  for (float v : c.layers[0].pixels) EXPECT_FLOAT_EQ(v, 1.75f);
-  EXPECT_THROW(combine_means(a, 1, flat_image(2, 2, {{"other", 1.f}}), 1), std::invalid_argument);
-}

@@ -1,5 +1,5 @@
 // CI-sized convergence checks, one per estimator, on the analytic slabs
-// (analysis/analytic_slab.h, PHYSICS.md §7): RMSE against samples falls with a
+// (analysis/analytic_slab.h, docs/physics.md §7): RMSE against samples falls with a
 // log-log slope of -1/2 +- 0.1 and the mean shows no bias at 4 sigma.
 // Each pixel of the 16x16 image is an independent replicate of the same exact
 // value, so one progressive render gives both the RMSE and its standard error.
@@ -96,7 +96,7 @@ TEST(Convergence, FullFluorescenceOnSlab) {
 }
 
 TEST(AnalyticSlab, QuadratureMatchesTheClosedFormForAUniformSlab) {
-  // The depth quadrature (used for graded slabs) must reproduce PHYSICS.md §7's closed form:
+  // The depth quadrature (used for graded slabs) must reproduce docs/physics.md §7's closed form:
   // L = Q f(l) / (4 pi l) * int l' E(l') dl' * mu_a (1 - e^{-(zeta + zeta + mu_a) D}) / (zeta + zeta + mu_a).
   const SlabCase slab = analytic_case("slab");
   const auto dir = chlorovdb::test::scratch_dir("analysis_tests");

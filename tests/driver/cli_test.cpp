@@ -1,7 +1,8 @@
 // `chlorovdb render` / `merge` as a user runs them, in child processes: a render
 // killed with SIGKILL resumes from its checkpoint to the same image as an
 // uninterrupted run; Ctrl-C writes the image and a checkpoint; crops and sample
-// ranges merge into the single-run image; bad combinations are refused.
+// ranges merge into the single-run image; bad combinations are refused;
+// `reference` resumes bit for bit; `render --set` works in a read-only folder.
 #include <algorithm>
 #include <cmath>
 #include <cstring>
@@ -167,6 +168,98 @@ TEST(RenderCli, MetadataNamesTheMajorantCellSize) {
   ASSERT_TRUE(std::holds_alternative<std::string>(*v));
   const int size = std::stoi(std::get<std::string>(*v));
   EXPECT_NE(std::find(kMajorantCellSizes.begin(), kMajorantCellSizes.end(), size), kMajorantCellSizes.end());
+}
+
+// `render --set` edits the scene in memory: a scene in a read-only folder renders,
+// nothing is written beside it, its relative paths still resolve against its
+// folder, and the edit changes the image (a stronger lamp, a brighter picture).
+TEST(RenderCli, SetEditsASceneInAReadOnlyFolderWithoutWritingBesideIt) {
+  const TestDir dir;
+  const auto folder = dir / "readonly";
+  std::filesystem::create_directories(folder);
+  std::ofstream(folder / "floor.obj") << "v -40 0 -40\nv 40 0 -40\nv 40 0 40\nv -40 0 40\nf 1 4 3\nf 1 3 2\n";
+  std::ofstream(folder / "scene.json") << R"({
+    "length_unit": "cm",
+    "render": {"resolution": [16, 12], "spp": 2, "wavelengths": 4},
+    "camera": {"position": [0, 9, 26], "look_at": [0, 0, 0], "fov": 40},
+    "materials": {"floor": {"type": "diffuse", "albedo": 0.5}},
+    "shapes": [{"type": "mesh", "file": "floor.obj", "material": "floor"},
+               {"type": "quad", "corner": [-4, 10, -4], "edge_u": [8, 0, 0], "edge_v": [0, 0, 8],
+                "emission": {"spectrum": "D65", "scale": 1}}]
+  })";
+  std::filesystem::permissions(folder, std::filesystem::perms::owner_read | std::filesystem::perms::owner_exec |
+                                           std::filesystem::perms::group_read | std::filesystem::perms::others_read);
+  auto listing = [&] {
+    std::vector<std::string> names;
+    for (const auto& e : std::filesystem::directory_iterator(folder)) names.push_back(e.path().filename().string());
+    std::sort(names.begin(), names.end());
+    return names;
+  };
+  const std::vector<std::string> before = listing();
+  auto render_to = [&](const std::string& name, std::vector<std::string> sets) {
+    std::vector<std::string> a = {kExe, "render", (folder / "scene.json").string(), "-o", (dir / name).string(), "--threads", "1", "-q"};
+    for (const std::string& s : sets) a.insert(a.end(), {"--set", s});
+    const auto r = run(a, dir / (name + ".log"));
+    EXPECT_EQ(r.status, 0) << r.output;
+    return read_exr(dir / name);
+  };
+  const Image plain = render_to("plain.exr", {});
+  const Image bright = render_to("bright.exr", {"shapes[1].emission.scale=4", "render.spp=2"});
+  std::filesystem::permissions(folder, std::filesystem::perms::owner_all);
+  EXPECT_EQ(listing(), before) << "nothing is written beside the scene";
+  ASSERT_EQ(plain.layers[0].pixels.size(), bright.layers[0].pixels.size());
+  double sum_plain = 0, sum_bright = 0;
+  for (size_t i = 0; i < plain.layers[0].pixels.size(); ++i) {
+    sum_plain += plain.layers[0].pixels[i];
+    sum_bright += bright.layers[0].pixels[i];
+  }
+  ASSERT_GT(sum_plain, 0);
+  // Same seed and samples, the one light four times as strong: four times the image.
+  EXPECT_NEAR(sum_bright / sum_plain, 4.0, 1e-4);
+
+  // A malformed edit is named.
+  const auto bad = run({kExe, "render", (folder / "scene.json").string(), "-o", (dir / "bad.exr").string(), "--set", "shapes[9].x=1", "-q"},
+                       dir / "bad.log");
+  EXPECT_NE(bad.status, 0);
+  EXPECT_NE(bad.output.find("has no element 9"), std::string::npos) << bad.output;
+}
+
+// `reference` is the render session with its checkpoint beside the EXR: Ctrl-C
+// writes the EXR so far, --resume continues from the exact sums, and the result
+// is bit for bit the uninterrupted reference.
+TEST(ReferenceCli, InterruptedReferenceResumesToTheUninterruptedOne) {
+  const TestDir dir;
+  auto args = [&](const std::string& name, std::vector<std::string> extra) {
+    std::vector<std::string> a = {kExe, "reference", scene_file(), "-o", (dir / name).string(), "--spp", "400", "--resolution", "32x24",
+                                  "--wavelengths", "4", "--seed", "3", "--threads", "2", "--checkpoint-every", "0", "-q"};
+    a.insert(a.end(), extra.begin(), extra.end());
+    return a;
+  };
+  const Child c = spawn(args("int.exr", {}), dir / "int.log");
+  ASSERT_TRUE(wait_for_file(c, dir / "int.exr.ckpt", std::chrono::seconds(60))) << read_text(dir / "int.log");
+  ::kill(c.pid, SIGINT);
+  EXPECT_EQ(wait_for(c), 130) << read_text(dir / "int.log");
+  const Image partial = read_exr(dir / "int.exr");
+  const int done = metadata_int(partial, "spp_done");
+  EXPECT_GT(done, 0);
+  EXPECT_LT(done, 400);
+  EXPECT_EQ(read_checkpoint_header(dir / "int.exr.ckpt").samples_done, done);
+
+  const auto resumed = run(args("int.exr", {"--resume"}), dir / "resumed.log");
+  ASSERT_EQ(resumed.status, 0) << resumed.output;
+  EXPECT_NE(resumed.output.find("resuming"), std::string::npos) << resumed.output;
+  const auto whole = run(args("whole.exr", {}), dir / "whole.log");
+  ASSERT_EQ(whole.status, 0) << whole.output;
+  const Image a = read_exr(dir / "int.exr");
+  EXPECT_EQ(metadata_int(a, "spp_done"), 400);
+  expect_same_pixels(a, read_exr(dir / "whole.exr"));
+
+  // Another seed cannot resume it.
+  auto other = args("int.exr", {"--resume"});
+  other[std::find(other.begin(), other.end(), "--seed") - other.begin() + 1] = "4";
+  const auto refused = run(other, dir / "refused.log");
+  EXPECT_NE(refused.status, 0);
+  EXPECT_NE(refused.output.find("seed"), std::string::npos) << refused.output;
 }
 
 TEST(MergeCli, TwoSampleRangesAndTwoCropsMergeToTheSingleRun) {

@@ -1,4 +1,4 @@
-// PHYSICS.md §4: the mirror-image emission of chlorophyll a compared with the
+// docs/physics.md §4: the mirror-image emission of chlorophyll a compared with the
 // measured emission (same solvent, diethyl ether) and the ocean-optics Gaussian.
 // The figures are printed and recorded (docs/fluorescence.md quotes them); the
 // assertions only pin what must hold for any sane emission spectrum.

@@ -1,4 +1,4 @@
-// PHYSICS.md §7: the analytic slab, photon balance, Q = 0, direct vs full.
+// docs/physics.md §7: the analytic slab, photon balance, Q = 0, direct vs full.
 #include <gtest/gtest.h>
 
 #include "media/pigment.h"
@@ -22,7 +22,7 @@ struct SlabTruth {
     const FluorescentPigment& fp = scene.fluorescence[0][0];
     return kAbsorptionPerMolarExtinction * fp.epsilon(float(lambda)) * setup.concentration * 1e-6;
   }
-  // L(λ) of PHYSICS.md §7 for the reflection side (camera on the lit face) or
+  // L(λ) of docs/physics.md §7 for the reflection side (camera on the lit face) or
   // the transmission side, integrating over λ' numerically.
   double radiance(double lambda, bool reflection_side) const {
     const FluorescentPigment& fp = scene.fluorescence[0][0];
@@ -273,10 +273,10 @@ TEST(FluorescenceSlab, ReferenceEstimatorIgnoresBothSwitches) {
 }
 
 TEST(FluorescenceSlab, ReferenceEstimatorBiasIsMeasured) {
-  // The thesis's estimator (PHYSICS.md §5) is kept to be measured, not trusted:
+  // The thesis's estimator (docs/physics.md §5) is kept to be measured, not trusted:
   // record its ratio to the exact slab radiance (printed and in the test XML).
   // It triggers emission by absorption at the emitted wavelength (here only the
-  // solvent absorbs there, PHYSICS.md §5 point 1), so its answer follows the
+  // solvent absorbs there, docs/physics.md §5 point 1), so its answer follows the
   // solvent, not the pigment.
   SlabSetup s;
   s.mode = "reference";
@@ -304,7 +304,7 @@ TEST(FluorescenceSlab, ReferenceEstimatorExcitesThroughGlass) {
     std::string json = slab_scene_json(s);
     const std::string interface = R"({"type": "interface"})";
     json.replace(json.find(interface), interface.size(), R"({"type": "dielectric", "ior": 1.5})");
-    // It needs absorption at the emitted wavelengths to trigger events (PHYSICS.md §5.1).
+    // It needs absorption at the emitted wavelengths to trigger events (docs/physics.md §5.1).
     const std::string solvent = R"("solvent": "none")";
     json.replace(json.find(solvent), solvent.size(), R"("solvent": {"absorption": 30, "rayleigh": false})");
     return load_scene(write_scene(name, json));

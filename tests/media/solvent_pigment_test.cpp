@@ -7,7 +7,7 @@
 using namespace chlorovdb;
 
 TEST(Solvent, WaterRayleighScatteringMatchesPhysicsNote) {
-  // PHYSICS.md §2: about 2.6e-3 /m; 1.6e-4 /m would mean the 16 pi / 3 was dropped.
+  // docs/physics.md §2: about 2.6e-3 /m; 1.6e-4 /m would mean the 16 pi / 3 was dropped.
   const float s = water_rayleigh_sigma_s(500.f, 1.337f, 293.f);
   EXPECT_NEAR(s, 2.60e-3f, 0.02e-3f);
   // lambda^-4 and linear in temperature.
@@ -17,7 +17,7 @@ TEST(Solvent, WaterRayleighScatteringMatchesPhysicsNote) {
 }
 
 TEST(Pigment, AbsorptionFromDecadicMolarExtinction) {
-  // PHYSICS.md §1: eps = 85 265 L/mol/cm at 5 uM gives about 98 /m.
+  // docs/physics.md §1: eps = 85 265 L/mol/cm at 5 uM gives about 98 /m.
   EXPECT_NEAR(kAbsorptionPerMolarExtinction * 85265.f * 5e-6f, 98.16f, 0.01f);
 }
 

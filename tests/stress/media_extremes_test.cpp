@@ -101,7 +101,7 @@ TEST(Stress, OpticalDepthGridAuto) { optical_depth(true, "auto", {1e-3, 1, 1e3})
 // Quantum yield at its limits.
 // ---------------------------------------------------------------------------
 
-// Q = 0: PHYSICS.md §7 "Q = 0 gives exactly zero fluorescence", in every mode.
+// Q = 0: docs/physics.md §7 "Q = 0 gives exactly zero fluorescence", in every mode.
 TEST(Stress, QuantumYieldZeroGivesExactlyZeroFluorescence) {
   for (const std::string mode : {"auto", "direct", "full", "reference", "off"}) {
     RenderCase c;

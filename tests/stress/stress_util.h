@@ -116,7 +116,7 @@ inline std::string num(double v) {
 // The stress suite's test dye: decadic molar extinction flat over the whole range
 // (so it absorbs its own emission: absorption and emission overlap everywhere).
 inline constexpr double kDyeEpsilon = 1e4;                              // L mol^-1 cm^-1
-inline constexpr double kSigmaPerMolar = 100 * 2.302585 * kDyeEpsilon;  // 1/m per mol/L (PHYSICS.md §1)
+inline constexpr double kSigmaPerMolar = 100 * 2.302585 * kDyeEpsilon;  // 1/m per mol/L (docs/physics.md §1)
 
 // Image size, wavelengths per path and path depth of a dye_cube render.
 struct DyeCubeRender {

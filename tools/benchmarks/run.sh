@@ -74,7 +74,7 @@ for scene in "${scenes[@]}"; do
 
   # Reference: cached across runs, restarted when the scene or the settings change.
   stamp="$(sha256sum "$scene" | cut -d' ' -f1) $RESOLUTION $REF_SPP"
-  if [ "$(cat "$dir/reference.stamp" 2>/dev/null)" != "$stamp" ]; then rm -f "$dir/reference.exr"; fi
+  if [ "$(cat "$dir/reference.stamp" 2>/dev/null)" != "$stamp" ]; then rm -f "$dir/reference.exr" "$dir/reference.exr.ckpt"; fi
   "$CHLOROVDB" reference "$scene" -o "$dir/reference.exr" --spp "$REF_SPP" --resolution "$RESOLUTION" \
     --seed "$REF_SEED" --threads "$REF_THREADS" --checkpoint-every 30 --resume -q
   echo "$stamp" > "$dir/reference.stamp"
@@ -129,7 +129,7 @@ for scene in "${scenes[@]}"; do
     read -r _ gain_full full_bias _ < <("$CHLOROVDB_BENCH" best "${fl[@]}" --layer fluorescence \
       --baseline fluorescence=reference --among default)
     uvb_lines+="- **$name** (fluorescence layer, $BUDGET CPU-s, 1/(relMSE·time)): our most efficient estimator, $best,
-  is **${gain}×** as efficient as the reference estimator (PHYSICS.md §5); our default (auto) is ${gain_full}×.
+  is **${gain}×** as efficient as the reference estimator (docs/physics.md §5); our default (auto) is ${gain_full}×.
   Mean bias against the reference image: $best ${best_bias} %, default ${full_bias} %, reference estimator ${ref_bias} %."$'\n'
   fi
 done
@@ -196,7 +196,7 @@ ${tables}
 ## Our estimators against the thesis's, on the scenes lit by UVB
 
 How to read these ratios: the thesis's estimator triggers emission by absorption at the
-emitted wavelength (PHYSICS.md §5.1), where chlorophyll hardly absorbs, so on these scenes it
+emitted wavelength (docs/physics.md §5.1), where chlorophyll hardly absorbs, so on these scenes it
 renders almost no fluorescence (its mean bias is the last figure of each line). Its relMSE is
 then its squared relative bias, about 1, and does not fall with time; an unbiased estimator's
 falls as 1/time, so these equal-time ratios grow in proportion to the budget. Below 1, our
