@@ -30,14 +30,45 @@ Ray next_segment(const Scene& scene, const SurfaceHit& hit, const Vec3& wi, cons
   return scene.geometry.spawn_ray_to(hit, p_light, t_max);
 }
 
-// Unpolarised Fresnel transmittance of a smooth dielectric at this crossing.
-float dielectric_transmission(const Scene& scene, const ShapeBinding& b, const SurfaceHit& hit, const Ray& ray,
-                              const SampledWavelengths& lambda) {
-  const auto& glass = std::get<Dielectric>(scene.materials[b.material]);
-  // cos_i > 0 when entering (moving against ng); fresnel_dielectric inverts eta otherwise.
-  return 1.f - fresnel_dielectric(dot(-normalize(ray.d), hit.ng), ior_at(glass, lambda[0]));
+// The smooth dielectric faces a straight-through excitation ray crossed, in the
+// order it met them (from the medium point toward the light).
+struct DielectricFaces {
+  static constexpr int kMax = 16;
+  Vec3 ng[kMax];
+  float ior[kMax];  // relative IOR, n_inside / n_outside of the face
+  int count = 0;
+};
+
+}  // namespace
+
+float straight_through_transmission(const Vec3* ng, const float* ior, int count, const Vec3& wi) {
+  // The light travels along v = -wi, the direction it has in the light's own
+  // medium: the angle at each face is the one a ray from the light refracted by
+  // every face before it would have (Snell applied to the direction, not the
+  // position). Testing each face at the unrefracted angle instead found total
+  // internal reflection at a glass-air face whenever the light was more than
+  // 41.8° off its normal, although light coming from air never reflects totally.
+  Vec3 v = -normalize(wi);
+  float weight = 1.f;
+  for (int k = count - 1; k >= 0; --k) {
+    const bool entering = dot(v, ng[k]) < 0.f;  // moving against the outward normal
+    const Vec3 n = entering ? ng[k] : -ng[k];   // faces the light's side
+    const float eta = entering ? ior[k] : 1.f / ior[k];  // n on x's side / n on the light's side
+    const float cos_i = std::min(1.f, -dot(v, n));
+    const float sin2_t = std::max(0.f, 1.f - cos_i * cos_i) / (eta * eta);
+    if (sin2_t >= 1.f) return 0.f;  // total internal reflection, seen from the light's side
+    const float cos_t = std::sqrt(1.f - sin2_t);
+    // Fresnel transmission, and the beam's compression: the flux through a patch
+    // of the face, E cos_i, arrives as E' cos_t, so fluence (and the irradiance
+    // of a collimated beam) changes by cos_i / cos_t. For parallel planar faces
+    // both factors are those of the exact refracted path.
+    weight *= (1.f - fresnel_dielectric(cos_i, eta)) * (cos_i / std::max(cos_t, 1e-6f));
+    v = normalize(v / eta + (cos_i / eta - cos_t) * n);
+  }
+  return weight;
 }
 
+namespace {
 }  // namespace
 
 TransmittanceEstimator estimator_for(const Scene& scene, int medium) {
@@ -115,14 +146,17 @@ SampledSpectrum trace_transmittance(const Scene& scene, const ShadowOrigin& from
   Ray ray = first_segment(scene, from, wi, p_light, to_infinity, &t_max);
   int medium = from.medium;
   const SampledWavelengths& lambda = media.lambda();
+  DielectricFaces faces;
   for (int crossings = 0; crossings < 256; ++crossings) {
     const auto hit = scene.geometry.intersect(ray, t_max);
     if (hit) {
       const ShapeBinding& b = scene.shapes[hit->shape_id];
       if (!is_pass_through(scene, b)) {
-        const bool glass = std::holds_alternative<Dielectric>(scene.materials[b.material]);
-        if (!glass || dielectrics == DielectricCrossing::block) return SampledSpectrum(0.f);
-        T *= dielectric_transmission(scene, b, *hit, ray, lambda);
+        const auto* glass = std::get_if<Dielectric>(&scene.materials[b.material]);
+        if (!glass || dielectrics == DielectricCrossing::block || faces.count == DielectricFaces::kMax)
+          return SampledSpectrum(0.f);
+        faces.ng[faces.count] = hit->ng;
+        faces.ior[faces.count++] = ior_at(*glass, lambda[0]);
       }
     }
     if (medium >= 0) {
@@ -131,7 +165,7 @@ SampledSpectrum trace_transmittance(const Scene& scene, const ShadowOrigin& from
       T *= transmittance(ray, t_end, lambda, scene.media[medium], media[medium], estimator, rng);
       if (T.is_black()) return T;
     }
-    if (!hit) return T;
+    if (!hit) return faces.count ? T * straight_through_transmission(faces.ng, faces.ior, faces.count, wi) : T;
     medium = medium_after_crossing(scene.shapes[hit->shape_id], hit->ng, ray.d);
     ray = next_segment(scene, *hit, wi, p_light, to_infinity, &t_max);
   }

@@ -76,6 +76,15 @@ enum class DielectricCrossing {
   straight_through_fresnel,    // thin-walled glass approximation: keep direction, weight by 1-R
 };
 
+// The straight_through_fresnel weight of a chain of smooth dielectric faces
+// (outward normals ng, relative IORs n_inside/n_outside) met in this order by a
+// ray leaving a medium point along wi toward a light: per face, the Fresnel
+// transmission at the angle of the light refracted by the faces between it and
+// the light, times the beam compression cos_i/cos_t. Exact for parallel planar
+// faces except for the ray's lateral shift, its bent path length inside the
+// media, and light reflected between faces. 0 under total internal reflection.
+float straight_through_transmission(const Vec3* ng, const float* ior, int count, const Vec3& wi);
+
 // Transmittance toward a light (no MIS) at the wavelengths of `media`, with
 // the scene's estimator unless `forced` names one. Used for delta lights and
 // excitation rays.
