@@ -137,8 +137,11 @@ float direct_excitation(const Scene& scene, const FluorescentPigment& fp, const 
   const DielectricCrossing glass = scene.settings.excitation_through_glass && !continuations_reach_light
                                        ? DielectricCrossing::straight_through_fresnel
                                        : DielectricCrossing::block;
-  const SampledSpectrum T =
-      trace_transmittance(scene, ShadowOrigin{x, medium, nullptr}, ls->wi, ls->p_light, ls->is_infinite, media, rng, glass);
+  ConnectionOptions options;
+  options.dielectrics = glass;
+  const SampledSpectrum T = connect_to_light(scene, ShadowOrigin{x, medium, nullptr},
+                                             LightTarget{ls->wi, ls->p_light, ls->is_infinite}, media, rng, options)
+                                .T;
   if (T[0] == 0.f) return 0.f;
   const float fluence = ls->L[0] * T[0] / (ls->pdf * pick->pmf * pdf_lambda);
   return lp * kAbsorptionPerMolarExtinction * fp.epsilon(lp) * c * fluence;
@@ -279,8 +282,12 @@ SampledSpectrum reference_fluorescence_event(const Scene& scene, const Vec3& p, 
   PreparedMedia media(scene, wl);
   const DielectricCrossing glass =
       scene.settings.excitation_through_glass ? DielectricCrossing::straight_through_fresnel : DielectricCrossing::block;
-  const SampledSpectrum T = trace_transmittance(scene, ShadowOrigin{p, medium, nullptr}, ls->wi, ls->p_light,
-                                                ls->is_infinite, media, rng, glass, TransmittanceEstimator::delta);
+  ConnectionOptions options;
+  options.dielectrics = glass;
+  options.forced = TransmittanceEstimator::delta;
+  const SampledSpectrum T = connect_to_light(scene, ShadowOrigin{p, medium, nullptr},
+                                             LightTarget{ls->wi, ls->p_light, ls->is_infinite}, media, rng, options)
+                                .T;
   if (T[0] == 0.f) return {};
   const SampledSpectrum f = fp.emission.sample(lambda);
   return beta * f * (ls->L[0] * T[0] / (ls->pdf * pick_pmf));

@@ -2,6 +2,7 @@
 
 #include <cmath>
 
+#include "tracking/roulette.h"
 #include "tracking/sample_t_maj.h"
 
 namespace chlorovdb {
@@ -78,72 +79,16 @@ TransmittanceEstimator estimator_for(const Scene& scene, int medium) {
   return scene.settings.transmittance;
 }
 
-ShadowMis trace_shadow_mis(const Scene& scene, const ShadowOrigin& from, const Vec3& wi, const Vec3& p_light,
-                           bool to_infinity, PreparedMedia& media, Rng& rng) {
-  ShadowMis s;
+LightConnection connect_to_light(const Scene& scene, const ShadowOrigin& from, const LightTarget& to,
+                                 PreparedMedia& media, Rng& rng, const ConnectionOptions& options) {
+  LightConnection c;
+  auto blocked = [&c] {
+    c.T = SampledSpectrum(0.f);
+    c.blocked = true;
+    return c;
+  };
   float t_max;
-  Ray ray = first_segment(scene, from, wi, p_light, to_infinity, &t_max);
-  int medium = from.medium;
-  const SampledWavelengths& lambda = media.lambda();
-  for (int crossings = 0; crossings < 256; ++crossings) {
-    const auto hit = scene.geometry.intersect(ray, t_max);
-    if (hit && !is_pass_through(scene, scene.shapes[hit->shape_id])) {
-      s.blocked = true;
-      return s;
-    }
-    if (medium >= 0 && scene.track_by_transmittance(medium)) {
-      // As the camera path does in absorbing-only media: a plain weight.
-      s.T_ray *= transmittance(ray, hit ? hit->t : t_max, lambda, scene.media[medium], media[medium],
-                               estimator_for(scene, medium), rng);
-      if (s.T_ray.is_black()) {
-        s.blocked = true;
-        return s;
-      }
-    } else if (medium >= 0) {
-      const float t_end = hit ? hit->t : t_max;
-      // Ratio tracking inside the null-scattering framework: every tentative
-      // collision multiplies by sigma_n/sigma_maj (pbrt-v4 SampleLd).
-      const SampledSpectrum T_maj = sample_T_maj(
-          ray, t_end, rng.uniform(), rng, lambda, scene.media[medium], media[medium],
-          [&](const Vec3&, const MediumCollision& c, const SampledSpectrum& sigma_maj, const MajorantTransmittance& T_maj) {
-            const SampledSpectrum T_m = T_maj();
-            const SampledSpectrum sigma_n = clamp_zero(sigma_maj - c.sigma_t());
-            const float pdf = T_m[0] * sigma_maj[0];
-            s.T_ray *= T_m * sigma_n / pdf;
-            s.r_l *= T_m * sigma_maj / pdf;
-            s.r_u *= T_m * sigma_n / pdf;
-            // Russian roulette on low transmittance keeps thick media cheap.
-            const SampledSpectrum Tr = safe_div(s.T_ray, SampledSpectrum(0.5f) * (s.r_l + s.r_u));
-            if (Tr.max_value() < 0.05f) {
-              if (rng.uniform() < 0.75f)
-                s.T_ray = SampledSpectrum(0.f);
-              else
-                s.T_ray /= 0.25f;
-            }
-            return !s.T_ray.is_black();
-          });
-      s.T_ray *= T_maj / T_maj[0];
-      s.r_l *= T_maj / T_maj[0];
-      s.r_u *= T_maj / T_maj[0];
-      if (s.T_ray.is_black()) {
-        s.blocked = true;
-        return s;
-      }
-    }
-    if (!hit) return s;
-    medium = medium_after_crossing(scene.shapes[hit->shape_id], hit->ng, ray.d);
-    ray = next_segment(scene, *hit, wi, p_light, to_infinity, &t_max);
-  }
-  s.blocked = true;  // more crossings than any sane scene has: treat as occluded
-  return s;
-}
-
-SampledSpectrum trace_transmittance(const Scene& scene, const ShadowOrigin& from, const Vec3& wi, const Vec3& p_light,
-                                    bool to_infinity, PreparedMedia& media, Rng& rng, DielectricCrossing dielectrics,
-                                    std::optional<TransmittanceEstimator> forced) {
-  SampledSpectrum T(1.f);
-  float t_max;
-  Ray ray = first_segment(scene, from, wi, p_light, to_infinity, &t_max);
+  Ray ray = first_segment(scene, from, to.wi, to.p_light, to.to_infinity, &t_max);
   int medium = from.medium;
   const SampledWavelengths& lambda = media.lambda();
   DielectricFaces faces;
@@ -153,23 +98,56 @@ SampledSpectrum trace_transmittance(const Scene& scene, const ShadowOrigin& from
       const ShapeBinding& b = scene.shapes[hit->shape_id];
       if (!is_pass_through(scene, b)) {
         const auto* glass = std::get_if<Dielectric>(&scene.materials[b.material]);
-        if (!glass || dielectrics == DielectricCrossing::block || faces.count == DielectricFaces::kMax)
-          return SampledSpectrum(0.f);
+        if (!glass || options.dielectrics == DielectricCrossing::block || faces.count == DielectricFaces::kMax)
+          return blocked();
         faces.ng[faces.count] = hit->ng;
         faces.ior[faces.count++] = ior_at(*glass, lambda[0]);
       }
     }
     if (medium >= 0) {
       const float t_end = hit ? hit->t : t_max;
-      const TransmittanceEstimator estimator = forced ? *forced : estimator_for(scene, medium);
-      T *= transmittance(ray, t_end, lambda, scene.media[medium], media[medium], estimator, rng);
-      if (T.is_black()) return T;
+      if (options.mis && !scene.track_by_transmittance(medium)) {
+        // Ratio tracking inside the null-scattering framework: every tentative
+        // collision multiplies by sigma_n/sigma_maj (pbrt-v4 SampleLd).
+        const SampledSpectrum T_maj = sample_T_maj(
+            ray, t_end, rng.uniform(), rng, lambda, scene.media[medium], media[medium],
+            [&](const Vec3&, const MediumCollision& mc, const SampledSpectrum& sigma_maj,
+                const MajorantTransmittance& T_maj) {
+              const SampledSpectrum T_m = T_maj();
+              const SampledSpectrum sigma_n = clamp_zero(sigma_maj - mc.sigma_t());
+              const float pdf = T_m[0] * sigma_maj[0];
+              c.T *= T_m * sigma_n / pdf;
+              c.r_l *= T_m * sigma_maj / pdf;
+              c.r_u *= T_m * sigma_n / pdf;
+              const SampledSpectrum Tr = safe_div(c.T, SampledSpectrum(0.5f) * (c.r_l + c.r_u));
+              if (const float q = roulette_survival(Tr.max_value()); q < 1.f) {
+                if (rng.uniform() < q)
+                  c.T /= q;
+                else
+                  c.T = SampledSpectrum(0.f);
+              }
+              return !c.T.is_black();
+            });
+        c.T *= T_maj / T_maj[0];
+        c.r_l *= T_maj / T_maj[0];
+        c.r_u *= T_maj / T_maj[0];
+      } else {
+        // Absorbing-only media (as the camera path treats them) and connections
+        // without MIS: a plain transmittance weight.
+        const TransmittanceEstimator estimator = options.forced ? *options.forced : estimator_for(scene, medium);
+        c.T *= transmittance(ray, t_end, lambda, scene.media[medium], media[medium], estimator, rng);
+      }
+      if (c.T.is_black()) return blocked();
     }
-    if (!hit) return faces.count ? T * straight_through_transmission(faces.ng, faces.ior, faces.count, wi) : T;
+    if (!hit) {
+      if (faces.count) c.T *= straight_through_transmission(faces.ng, faces.ior, faces.count, to.wi);
+      if (c.T.is_black()) return blocked();
+      return c;
+    }
     medium = medium_after_crossing(scene.shapes[hit->shape_id], hit->ng, ray.d);
-    ray = next_segment(scene, *hit, wi, p_light, to_infinity, &t_max);
+    ray = next_segment(scene, *hit, to.wi, to.p_light, to.to_infinity, &t_max);
   }
-  return SampledSpectrum(0.f);
+  return blocked();  // more crossings than any sane scene has: treat as occluded
 }
 
 }  // namespace chlorovdb
