@@ -17,6 +17,27 @@ namespace {
 constexpr double kMicromolarAbsorption = 100.0 * 2.302585092994046 * 1e-6;  // 1/m per (L/mol/cm · µM)
 constexpr double kHalfWidth = 0.05;  // m: the slab's lateral half extent (the view is 1 cm wide)
 
+constexpr double kGlassGap = 0.001;  // m between the plate and the lit face
+
+// Fresnel reflectance of s- and p-polarised light from index 1 into n at incidence theta.
+std::pair<double, double> fresnel_sp(double n, double theta) {
+  const double ci = std::cos(theta), st = std::sin(theta) / n, ct = std::sqrt(1 - st * st);
+  const double rs = (ci - n * ct) / (ci + n * ct), rp = (n * ci - ct) / (n * ci + ct);
+  return {rs * rs, rp * rp};
+}
+
+}  // namespace
+
+double plate_transmission(double n, double theta) {
+  const auto [Rs, Rp] = fresnel_sp(n, theta);
+  const double R = 0.5 * (Rs + Rp);
+  return (1 - R) * (1 - R) / (1 - R * R);
+}
+
+namespace {
+
+double incidence_rad(const SlabCase& s) { return s.incidence_deg * M_PI / 180.0; }
+
 double concentration_at_depth(const SlabCase& s, double depth) { return s.c_lit + (s.c_far - s.c_lit) * depth / s.D; }
 
 // int_0^D mu_a(s) e^{-tau'(s)} e^{-zeta d(s)} ds for a flat extinction eps (composite Simpson).
@@ -24,12 +45,21 @@ double depth_integral(const SlabCase& s, double eps) {
   const int n = 4000;  // even
   const double h = s.D / n;
   const double k = kMicromolarAbsorption * eps;
+  const double sec = 1.0 / std::cos(incidence_rad(s));  // the beam's path per unit depth
+  // Behind a glass plate the camera also sees the lit-side emission reflected by the plate.
+  double R_eff = 0;
+  if (s.glass_ior > 0) {
+    const double R = std::pow((s.glass_ior - 1) / (s.glass_ior + 1), 2);
+    R_eff = 2 * R / (1 + R);
+  }
   double sum = 0;
   for (int i = 0; i <= n; ++i) {
     const double depth = i * h;
-    const double tau_excitation = s.zeta * depth + k * (s.c_lit * depth + (s.c_far - s.c_lit) * depth * depth / (2 * s.D));
+    const double tau_excitation =
+        sec * (s.zeta * depth + k * (s.c_lit * depth + (s.c_far - s.c_lit) * depth * depth / (2 * s.D)));
     const double tau_emission = s.zeta * (s.reflection_side ? depth : s.D - depth);
-    const double f = k * concentration_at_depth(s, depth) * std::exp(-tau_excitation - tau_emission);
+    const double seen = std::exp(-tau_emission) + R_eff * std::exp(-s.zeta * (s.D + depth));
+    const double f = k * concentration_at_depth(s, depth) * std::exp(-tau_excitation) * seen;
     sum += f * (i == 0 || i == n ? 1 : (i % 2 ? 4 : 2));
   }
   return sum * h / 3;
@@ -45,7 +75,8 @@ const Pigment& slab_pigment(const Scene& scene) {
 double excitation_integral(const SlabCase& s, const Scene& scene) {
   const Pigment& p = slab_pigment(scene);
   const Spectrum& E = emission_spectrum(scene.lights.at(0));
-  const double E_scale = light_scale(scene.lights.at(0));
+  double E_scale = light_scale(scene.lights.at(0));
+  if (s.glass_ior > 0) E_scale *= plate_transmission(s.glass_ior, incidence_rad(s));
   std::map<float, double> G;  // by extinction value: flat inside the band, so a handful of entries
   const double step = 0.01, lo = s.eps_lo - 0.5, hi = s.eps_hi + 0.5;
   const int n = int(std::lround((hi - lo) / step));
@@ -65,7 +96,9 @@ std::string spectrum_or_number(double v) { return fmt::format("{}", v); }
 
 }  // namespace
 
-std::vector<std::string> analytic_case_names() { return {"slab", "slab_transmission", "slab_linear"}; }
+std::vector<std::string> analytic_case_names() {
+  return {"slab", "slab_transmission", "slab_linear", "slab_glass_wall", "slab_glass_wall_oblique"};
+}
 
 SlabCase analytic_case(std::string_view name) {
   SlabCase s;
@@ -84,6 +117,12 @@ SlabCase analytic_case(std::string_view name) {
     s.c_far = 5;
     return s;
   }
+  if (name == "slab_glass_wall" || name == "slab_glass_wall_oblique") {
+    s.reflection_side = false;
+    s.glass_ior = 1.5;
+    if (name == "slab_glass_wall_oblique") s.incidence_deg = 60;
+    return s;
+  }
   std::string names;
   for (const std::string& n : analytic_case_names()) names += (names.empty() ? "" : ", ") + n;
   throw InputError("command line", "--analytic", name, "unknown analytic case (known: " + names + ")");
@@ -92,6 +131,18 @@ SlabCase analytic_case(std::string_view name) {
 std::filesystem::path write_slab_scene(const SlabCase& s, const std::filesystem::path& dir) {
   std::filesystem::create_directories(dir);
   if (s.c_lit != s.c_far && !s.grid) throw std::invalid_argument("a slab with a concentration gradient needs grid = true");
+  if (s.glass_ior > 0 && s.reflection_side)
+    throw std::invalid_argument("a slab behind glass is observed from its far side only");
+  if (!(s.incidence_deg >= 0 && s.incidence_deg < 89))
+    throw std::invalid_argument("slab incidence angle must lie in [0, 89) degrees");
+  std::string glass_material, glass_shape;
+  if (s.glass_ior > 0) {
+    glass_material = fmt::format(R"(, "glass": {{"type": "dielectric", "ior": {}}})", s.glass_ior);
+    glass_shape = fmt::format(R"(, {{"type": "box", "min": [-{w}, -{w}, {z0}], "max": [{w}, {w}, {z1}], "material": "glass"}})",
+                              fmt::arg("w", kHalfWidth), fmt::arg("z0", s.D + kGlassGap),
+                              fmt::arg("z1", s.D + kGlassGap + s.glass_thickness));
+  }
+  const double theta = incidence_rad(s);
   std::string pigment_in_medium;
   if (s.grid) {
     // Voxel centres every D/8 in z from -D/8 to D + D/8 and 4 x 4 laterally,
@@ -126,12 +177,12 @@ std::filesystem::path write_slab_scene(const SlabCase& s, const std::filesystem:
   "pigments": {{"dye": {{
     "extinction": {{"table": {{"lambda": [{l0}, {l1}, {l2}, {l3}], "value": [0, {eps}, {eps}, 0]}}}},
     "quantum_yield": {Q}, "emission": {emission}}}}},
-  "materials": {{"boundary": {{"type": "interface"}}}},
+  "materials": {{"boundary": {{"type": "interface"}}{glass_material}}},
   "media": {{"solution": {{"solvent": {{"absorption": {zeta}, "rayleigh": false}},
     "pigments": [{pim}]}}}},
   "shapes": [{{"type": "box", "min": [-{w}, -{w}, 0], "max": [{w}, {w}, {D}],
-              "material": "boundary", "inside": "solution"}}],
-  "lights": [{{"type": "distant", "direction": [0, 0, -1], "spectrum": {light}, "scale": 1}}]
+              "material": "boundary", "inside": "solution"}}{glass_shape}],
+  "lights": [{{"type": "distant", "direction": [{dx}, 0, {dz}], "spectrum": {light}, "scale": 1}}]
 }}
 )",
       fmt::arg("res", s.resolution), fmt::arg("spp", s.spp), fmt::arg("wl", s.wavelengths),
@@ -139,7 +190,9 @@ std::filesystem::path write_slab_scene(const SlabCase& s, const std::filesystem:
       fmt::arg("D2", s.D / 2), fmt::arg("l0", s.eps_lo - 1e-3), fmt::arg("l1", s.eps_lo), fmt::arg("l2", s.eps_hi),
       fmt::arg("l3", s.eps_hi + 1e-3), fmt::arg("eps", s.epsilon), fmt::arg("Q", s.Q),
       fmt::arg("emission", s.emission), fmt::arg("zeta", spectrum_or_number(s.zeta)), fmt::arg("pim", pigment_in_medium),
-      fmt::arg("w", kHalfWidth), fmt::arg("D", s.D), fmt::arg("light", s.light));
+      fmt::arg("w", kHalfWidth), fmt::arg("D", s.D), fmt::arg("light", s.light),
+      fmt::arg("glass_material", glass_material), fmt::arg("glass_shape", glass_shape),
+      fmt::arg("dx", -std::sin(theta)), fmt::arg("dz", -std::cos(theta)));
   const std::filesystem::path path = dir / (s.name + ".json");
   std::ofstream f(path);
   f << json;

@@ -19,6 +19,19 @@
 // the inner integral is done by composite Simpson quadrature (relative error
 // below 1e-9), the l' integral by the trapezoid rule on a 0.01 nm grid.
 //
+// A planar glass wall (slab_glass_wall*): a plate of relative IOR n, thickness
+// glass_thickness, parallel to the lit face a gap above it (vacuum between
+// plate and solution, so the solution's index is 1), the beam arriving at
+// `incidence_deg` from the normal; the camera on the far face. The beam leaves
+// the plate at its incidence angle theta, carrying the plate's incoherent
+// Fresnel transmission T(theta) = (1-R)² / (1 - R²), and runs a
+// path s / cos(theta) to depth s. The camera ray, after crossing the slab, is
+// reflected back by the plate with R_eff = 2R/(1+R) (R at normal incidence) and
+// sees the slab's lit-side emission a second time, attenuated by e^{-zeta D}.
+// R is the unpolarised reflectance ½(R_s + R_p) at every face, as the renderer
+// computes it (it does not track polarisation; tracking it would change T by
+// +1 % at 60°).
+//
 // What is compared: the camera sees only fluorescence (nothing else reaches
 // it), so the exact image has, in every pixel, total = fluorescence =
 // RGB(XYZ(L)) with XYZ(L) = int cmf(l) L(l) dl / int ybar dl over 360-830 nm (the
@@ -51,10 +64,16 @@ struct SlabCase {
   int wavelengths = 4;
   std::string fluorescence = "direct";
   std::string transmittance = "auto";
+  double glass_ior = 0;              // > 0: a glass plate in front of the lit face (transmission side only)
+  double glass_thickness = 0.002;    // m
+  double incidence_deg = 0;          // the beam's angle to the slab's normal
 };
 
 // "slab" (docs/physics.md §7, homogeneous, lit side), "slab_transmission" (same, far
-// side) and "slab_linear" (grid medium, concentration linear in depth, lit side).
+// side), "slab_linear" (grid medium, concentration linear in depth, lit side),
+// "slab_glass_wall" (far side, behind a glass plate of IOR 1.5, normal incidence)
+// and "slab_glass_wall_oblique" (the same, beam at 60°: past the critical angle
+// of the plate's glass-air face).
 std::vector<std::string> analytic_case_names();
 // Throws InputError listing the names for an unknown one.
 SlabCase analytic_case(std::string_view name);
@@ -65,6 +84,9 @@ std::filesystem::path write_slab_scene(const SlabCase& slab, const std::filesyst
 // The exact fluorescence radiance L(lambda) of every pixel, W m^-2 sr^-1 nm^-1
 // (the scene supplies the loaded spectra: extinction, normalised emission, light).
 double slab_radiance(const SlabCase& slab, const Scene& scene, double lambda_nm);
+// The plate's transmission at incidence theta (radians), relative IOR n, with
+// every internal reflection, unpolarised at each face as the renderer assumes.
+double plate_transmission(double n, double theta);
 // Its CIE XYZ as the film computes it.
 XYZ slab_xyz(const SlabCase& slab, const Scene& scene);
 // The exact image in the renderer's layout (total, fluorescence, nonfluorescence; RGB

@@ -1,5 +1,6 @@
 #include "integrator/fluorescence_event.h"
 
+#include <algorithm>
 #include <cmath>
 
 #include "core/sampling.h"
@@ -44,6 +45,50 @@ DistanceSample sample_source_distance(float u, float t_end, float sigma_ref) {
   float pdf = 1.f / t_end;
   if (use_exponential) pdf = 0.5f * pdf + 0.5f * sigma_ref * std::exp(-sigma_ref * t) / norm;
   return {t, pdf};
+}
+
+// In a grid medium the same mixture, each part weighted per majorant segment
+// by the bound on the pigment's concentration there: p(t) ∝ c_max(segment) ×
+// (uniform or exponential), so no point is drawn where the grid says the
+// pigment cannot be (a thin shell in a large box: the leaf), and none is
+// missed, since the source j ∝ c vanishes wherever c_max does. Two passes over
+// the segments (totals, then the chosen one) keep it free of allocation.
+// Returns pdf = 0 when the pigment is absent from the whole segment.
+DistanceSample sample_source_distance_in_grid(float u, const Medium& m, int pigment, const Ray& ray, float t_end,
+                                              float sigma_ref) {
+  const Ray ray_index = m.index_ray(ray);
+  double w_uniform = 0, w_exponential = 0;
+  // Per segment: c ∫ dt (uniform part) and c ∫ sigma e^{-sigma t} dt (exponential part).
+  auto exp_mass = [&](float a, float b) { return std::exp(-double(sigma_ref) * a) - std::exp(-double(sigma_ref) * b); };
+  for (MajorantIterator it = m.majorants(ray_index, t_end); const auto seg = it.next();) {
+    const double c = m.pigment_concentration_max(*seg, pigment);
+    w_uniform += c * (seg->t_max - seg->t_min);
+    w_exponential += c * exp_mass(seg->t_min, seg->t_max);
+  }
+  if (!(w_uniform > 0)) return {0.f, 0.f};
+  const bool use_exponential = sigma_ref * t_end > 1e-3f && w_exponential > 0;
+  const bool pick_uniform = !use_exponential || u < 0.5f;
+  const double v = use_exponential ? (pick_uniform ? u * 2.f : (u - 0.5f) * 2.f) : u;
+  double target = v * (pick_uniform ? w_uniform : w_exponential);
+  float t = t_end, c_at = 0.f;
+  for (MajorantIterator it = m.majorants(ray_index, t_end); const auto seg = it.next();) {
+    const double c = m.pigment_concentration_max(*seg, pigment);
+    if (!(c > 0)) continue;
+    const double w = c * (pick_uniform ? seg->t_max - seg->t_min : exp_mass(seg->t_min, seg->t_max));
+    c_at = float(c);
+    if (target < w) {
+      const double r = target / c;
+      t = pick_uniform ? float(seg->t_min + r)
+                       : float(-std::log(std::exp(-double(sigma_ref) * seg->t_min) - r) / sigma_ref);
+      t = std::clamp(t, seg->t_min, seg->t_max);
+      break;
+    }
+    target -= w;
+    t = seg->t_max;  // rounding ran past the last segment: its end
+  }
+  double pdf = c_at / w_uniform;
+  if (use_exponential) pdf = 0.5 * pdf + 0.5 * c_at * sigma_ref * std::exp(-double(sigma_ref) * t) / w_exponential;
+  return {t, float(pdf)};
 }
 
 // Distance to leave the scene's bounding box (for unbounded media).
@@ -92,8 +137,11 @@ float direct_excitation(const Scene& scene, const FluorescentPigment& fp, const 
   const DielectricCrossing glass = scene.settings.excitation_through_glass && !continuations_reach_light
                                        ? DielectricCrossing::straight_through_fresnel
                                        : DielectricCrossing::block;
-  const SampledSpectrum T =
-      trace_transmittance(scene, ShadowOrigin{x, medium, nullptr}, ls->wi, ls->p_light, ls->is_infinite, media, rng, glass);
+  ConnectionOptions options;
+  options.dielectrics = glass;
+  const SampledSpectrum T = connect_to_light(scene, ShadowOrigin{x, medium, nullptr},
+                                             LightTarget{ls->wi, ls->p_light, ls->is_infinite}, media, rng, options)
+                                .T;
   if (T[0] == 0.f) return 0.f;
   const float fluence = ls->L[0] * T[0] / (ls->pdf * pick->pmf * pdf_lambda);
   return lp * kAbsorptionPerMolarExtinction * fp.epsilon(lp) * c * fluence;
@@ -169,7 +217,11 @@ SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, 
     if (f[i] > 0.f) sigma_ref += mid.sigma_a[i] + mid.sigma_s[i], ++emitting;
   sigma_ref /= float(std::max(emitting, 1));
 
-  const DistanceSample ds = sample_source_distance(rng.uniform(), t_end, sigma_ref);
+  const DistanceSample ds = m.pigment_in_grid(fp.pigment)
+                               ? sample_source_distance_in_grid(rng.uniform(), m, fp.pigment, ray, t_end, sigma_ref)
+                               : sample_source_distance(rng.uniform(), t_end, sigma_ref);
+  if (!(ds.pdf > 0.f)) return {};
+  ++stats.fluorescence_points;
   const Vec3 x = ray.at(ds.t);
   const MediumProperties mp = sample_point(m, x, media[medium]);
   const float c = mp.concentration[fp.pigment];
@@ -230,8 +282,12 @@ SampledSpectrum reference_fluorescence_event(const Scene& scene, const Vec3& p, 
   PreparedMedia media(scene, wl);
   const DielectricCrossing glass =
       scene.settings.excitation_through_glass ? DielectricCrossing::straight_through_fresnel : DielectricCrossing::block;
-  const SampledSpectrum T = trace_transmittance(scene, ShadowOrigin{p, medium, nullptr}, ls->wi, ls->p_light,
-                                                ls->is_infinite, media, rng, glass, TransmittanceEstimator::delta);
+  ConnectionOptions options;
+  options.dielectrics = glass;
+  options.forced = TransmittanceEstimator::delta;
+  const SampledSpectrum T = connect_to_light(scene, ShadowOrigin{p, medium, nullptr},
+                                             LightTarget{ls->wi, ls->p_light, ls->is_infinite}, media, rng, options)
+                                .T;
   if (T[0] == 0.f) return {};
   const SampledSpectrum f = fp.emission.sample(lambda);
   return beta * f * (ls->L[0] * T[0] / (ls->pdf * pick_pmf));

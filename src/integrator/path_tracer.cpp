@@ -34,17 +34,16 @@ SampledSpectrum sample_direct_light(const Scene& scene, const ScatterVertex& v, 
   const auto [f, scatter_pdf] = scatter(ls->wi);
   if (f.is_black()) return {};
   const float light_pdf = ls->pdf * pick->pmf;
-  if (ls->is_delta) {
-    // No MIS partner: a transmittance estimate alone, with the scene's estimator.
-    const SampledSpectrum T = trace_transmittance(scene, v.origin, ls->wi, ls->p_light, ls->is_infinite, media, rng,
-                                                  DielectricCrossing::block);
-    return f * T * ls->L / (light_pdf * r_p.average(lambda.count()));
-  }
-  ShadowMis s = trace_shadow_mis(scene, v.origin, ls->wi, ls->p_light, ls->is_infinite, media, rng);
-  if (s.blocked) return {};
-  s.r_l *= r_p * light_pdf;
-  s.r_u *= r_p * scatter_pdf;
-  return f * s.T_ray * ls->L / (s.r_l + s.r_u).average(lambda.count());
+  // A delta light has no MIS partner: a transmittance estimate alone, with the scene's estimator.
+  ConnectionOptions options;
+  options.mis = !ls->is_delta;
+  LightConnection c =
+      connect_to_light(scene, v.origin, LightTarget{ls->wi, ls->p_light, ls->is_infinite}, media, rng, options);
+  if (c.blocked) return {};
+  if (ls->is_delta) return f * c.T * ls->L / (light_pdf * r_p.average(lambda.count()));
+  c.r_l *= r_p * light_pdf;
+  c.r_u *= r_p * scatter_pdf;
+  return f * c.T * ls->L / (c.r_l + c.r_u).average(lambda.count());
 }
 
 }  // namespace

@@ -17,7 +17,8 @@ struct PathRadiance {
 // Counters for reports and tests (per thread, summed by the caller).
 struct PathStats {
   uint64_t paths = 0;
-  uint64_t fluorescence_events = 0;
+  uint64_t fluorescence_points = 0;  // points drawn for an event, with or without pigment there
+  uint64_t fluorescence_events = 0;  // those where the pigment is present
   uint64_t excitation_rays = 0;
   uint64_t excitation_continuations = 0;
 };

@@ -57,32 +57,55 @@ struct ShadowOrigin {
   const SurfaceHit* hit = nullptr;
 };
 
-// Result of ratio tracking toward a light with the MIS ratios of the
-// null-scattering path integral (pbrt-v4 SampleLd): contribution weight is
-// T_ray / (r_u + r_l).average() after the caller multiplies in its pdfs.
-struct ShadowMis {
-  SampledSpectrum T_ray{1.f}, r_u{1.f}, r_l{1.f};
+// Where a connection ends: a sampled point on a light, or a direction to
+// infinity (distant and environment lights).
+struct LightTarget {
+  Vec3 wi;        // from the origin toward the light
+  Vec3 p_light;   // the point on the light (ignored when to_infinity)
+  bool to_infinity = false;
+};
+
+// What a connection does at a smooth dielectric surface.
+enum class DielectricCrossing {
+  block,                       // exact for point/distant lights: refraction cannot be aimed
+  straight_through_fresnel,    // thin-walled glass approximation (straight_through_transmission)
+};
+
+struct ConnectionOptions {
+  DielectricCrossing dielectrics = DielectricCrossing::block;
+  // Camera next-event estimation toward a non-delta light: in media tracked by
+  // collisions, ratio tracking inside the null-scattering framework with the
+  // MIS ratios of pbrt-v4's SampleLd, so light and phase/BSDF sampling combine.
+  // Otherwise (and always in media tracked by transmittance) T comes from the
+  // scene's transmittance estimator and r_u = r_l = 1.
+  bool mis = false;
+  std::optional<TransmittanceEstimator> forced;  // replaces the scene's estimator outside the MIS tracking
+};
+
+// A connection's result: the throughput T of its legs (medium transmittance
+// times interface weights) and the null-scattering MIS ratios. With MIS the
+// caller's weight is T / (r_u·p_scatter + r_l·p_light).average(); without, T.
+struct LightConnection {
+  SampledSpectrum T{1.f}, r_u{1.f}, r_l{1.f};
   bool blocked = false;
 };
 
-// Toward `p_light` (finite) or along `wi` to infinity. Opaque and refracting
-// surfaces block; interface surfaces are crossed, switching media.
-ShadowMis trace_shadow_mis(const Scene& scene, const ShadowOrigin& from, const Vec3& wi, const Vec3& p_light,
-                           bool to_infinity, PreparedMedia& media, Rng& rng);
+// The one routine that connects a point in a medium or on a surface to a
+// light through media and surfaces: camera next-event estimation and
+// fluorescence excitation rays both call it. Opaque surfaces block; interfaces
+// are crossed, switching media; smooth dielectrics follow options.dielectrics.
+// Russian roulette follows the tracking's single policy (tracking/roulette.h).
+LightConnection connect_to_light(const Scene& scene, const ShadowOrigin& from, const LightTarget& to,
+                                 PreparedMedia& media, Rng& rng, const ConnectionOptions& options);
 
-// What a shadow ray does at a smooth dielectric surface.
-enum class DielectricCrossing {
-  block,                       // exact for point/distant lights: refraction cannot be aimed
-  straight_through_fresnel,    // thin-walled glass approximation: keep direction, weight by 1-R
-};
-
-// Transmittance toward a light (no MIS) at the wavelengths of `media`, with
-// the scene's estimator unless `forced` names one. Used for delta lights and
-// excitation rays.
-SampledSpectrum trace_transmittance(const Scene& scene, const ShadowOrigin& from, const Vec3& wi,
-                                    const Vec3& p_light, bool to_infinity, PreparedMedia& media, Rng& rng,
-                                    DielectricCrossing dielectrics,
-                                    std::optional<TransmittanceEstimator> forced = std::nullopt);
+// The straight_through_fresnel weight of a chain of smooth dielectric faces
+// (outward normals ng, relative IORs n_inside/n_outside) met in this order by a
+// ray leaving a medium point along wi toward a light: per face, the Fresnel
+// transmission at the angle of the light refracted by the faces between it and
+// the light, times the beam compression cos_i/cos_t. Exact for parallel planar
+// faces except for the ray's lateral shift, its bent path length inside the
+// media, and light reflected between faces. 0 under total internal reflection.
+float straight_through_transmission(const Vec3* ng, const float* ior, int count, const Vec3& wi);
 
 // The estimator the settings ask for in `medium` (closed form if homogeneous under `auto`).
 TransmittanceEstimator estimator_for(const Scene& scene, int medium);

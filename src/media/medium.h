@@ -157,6 +157,12 @@ class Medium {
   }
   Vec3 index_point(const Vec3& p_world) const { return homogeneous() ? p_world : index_from_world_.point(p_world); }
   MajorantIterator majorants(const Ray& ray_index, float t_max) const { return majorants_.segments(ray_index, t_max); }
+  // True when pigment k's concentration comes from a grid (else it is a constant).
+  bool pigment_in_grid(int k) const { return pigment_channel_[k] >= 0; }
+  // No lookup along a majorant segment gives pigment k (a grid pigment) more than this, mol/L.
+  float pigment_concentration_max(const MajorantSegment& s, int k) const {
+    return s.c_max[pigment_channel_[k]] * pigment_scale_[k];
+  }
   // The grids' values at one point (one lookup per distinct grid): every coefficient there
   // follows from them, so a caller that needs several looks up once.
   using ChannelValues = std::array<float, kMaxMajorantChannels>;

@@ -5,23 +5,11 @@
 #include "core/constants.h"
 #include "core/keyword.h"
 #include "tracking/majorant_walk.h"
+#include "tracking/roulette.h"
 
 namespace chlorovdb {
 namespace {
 
-// Ratio-tracking roulette, a weight window: once the tracked factor is below
-// kRouletteWeight on every lane, a ray continues with probability T / kRouletteWeight
-// and survivors carry kRouletteWeight. Higher windows stop rays sooner but add
-// variance: on the cloud (docs/performance.md), 0.5 saves 1.5 % / 3.5 % of the
-// instructions at tau~10 / tau~100 for 1.8 % / 2.5 % more MSE, a wash; 1.0 loses
-// 11 % / 4 % efficiency.
-constexpr float kRouletteWeight = 0.25f;
-// The least survival probability either roulette uses. Rng::uniform() has 24 bits, so a
-// q below about 2^-24 would not be the probability actually played (u = 0 alone passes,
-// with probability 2^-24), and its survivors' 1/q could overflow to infinity (the
-// predicted roulette's q reaches 1e-40 at tau ~ 85). Clamped, survival stays exactly q
-// to within 2^-12 and a survivor's factor grows at most 4096-fold.
-constexpr float kMinSurvival = 1.f / 4096.f;
 // The predicted roulette looks only at segments predicted to take at least this optical
 // depth off every lane, ln(1 / kRouletteWeight): alone they would take an untouched
 // factor (1) below the window. Thinner ones cost no exp; the window at collisions
@@ -96,8 +84,7 @@ SampledSpectrum ratio_tracking(const Track& k, Rng& rng) {
         if (tau_r_min > kPredictedRouletteMinTau) {
           float predicted = 0.f;
           for (int i = 0; i < k.n; ++i) predicted = std::max(predicted, T[i] * std::exp(-tau_r[i]));
-          if (predicted < kRouletteWeight) {
-            const float q = std::max(predicted / kRouletteWeight, kMinSurvival);
+          if (const float q = roulette_survival(predicted); q < 1.f) {
             if (!(rng.uniform() < q)) {
               T = SampledSpectrum(0.f);
               return -1.f;
@@ -123,8 +110,7 @@ SampledSpectrum ratio_tracking(const Track& k, Rng& rng) {
         // stays out of the test, so residual ratio tracking keeps its relative
         // accuracy in thick but smooth media (rouletting on T * T_c instead saved
         // only 1.5 % more instructions on the cloud at tau~100).
-        if (T_max < kRouletteWeight) {
-          const float q = std::max(T_max / kRouletteWeight, kMinSurvival);
+        if (const float q = roulette_survival(T_max); q < 1.f) {
           if (!(rng.uniform() < q)) {
             T = SampledSpectrum(0.f);
             return false;

@@ -1,0 +1,41 @@
+#pragma once
+// A fluorescent pigment as the fluorescence estimator sees it: its spectra,
+// quantum yield and redistribution, and the lights that can excite it with one
+// excitation-wavelength sampler per light (filled in by the scene loader, which
+// knows the lights' power).
+#include <vector>
+
+#include "fluorescence/excitation_sampler.h"
+#include "fluorescence/redistribution.h"
+#include "lights/light_sampler.h"
+#include "spectra/spectrum.h"
+
+namespace chlorovdb {
+
+// One fluorescent pigment of one medium, with what excitation needs: the
+// lights that can excite it (others are never picked) and, per such light, the
+// λ' sampler ∝ S_light·ε·λ'.
+struct FluorescentPigment {
+  int pigment = 0;  // index into the medium's pigments
+  float quantum_yield = 0.f;
+  Spectrum epsilon;   // L mol^-1 cm^-1
+  Spectrum emission;  // unit integral
+  RedistributionWeight redistribution;
+  std::vector<int> lights;                     // lights that can excite it
+  std::vector<ExcitationSampler> excitation;   // parallel to `lights`
+  LightSampler light_sampler;                  // over `lights`, weighted by excitation power
+  // Some listed light shines in the absorption band (a light kept only to
+  // measure the cost of not skipping dark lights does not count).
+  bool excitation_possible() const {
+    for (const ExcitationSampler& es : excitation)
+      if (es.can_excite()) return true;
+    return false;
+  }
+  int slot_of_light(int light_index) const {   // position of a light in `lights`
+    for (size_t s = 0; s < lights.size(); ++s)
+      if (lights[s] == light_index) return int(s);
+    return -1;
+  }
+};
+
+}  // namespace chlorovdb
