@@ -50,34 +50,38 @@ bool leg_reaches_face(const Scene& scene, Ray ray, float dist, const ChainFace& 
 
 double planar_lateral_offset(std::span<const double> h, std::span<const double> n, double s) {
   double r = 0;
-  for (size_t i = 0; i < h.size(); ++i) r += h[i] * s / std::sqrt(n[i] * n[i] - s * s);
+  for (size_t i = 0; i < h.size(); ++i)
+    if (h[i] > 0) r += h[i] * s / std::sqrt(n[i] * n[i] - s * s);
   return r;
 }
 
 std::optional<double> solve_planar_invariant(std::span<const double> h, std::span<const double> n, double lateral) {
+  // Every layer bounds s (a ray must exist in each, even one of zero thickness);
+  // r(s) grows without bound only if a layer of the smallest index has thickness.
   double s_max = std::numeric_limits<double>::infinity();
-  for (size_t i = 0; i < h.size(); ++i)
-    if (h[i] > 0) s_max = std::min(s_max, n[i]);
+  for (size_t i = 0; i < h.size(); ++i) s_max = std::min(s_max, n[i]);
   if (!(lateral > 0)) return 0.0;
-  if (!std::isfinite(s_max)) return std::nullopt;
   // Safeguarded Newton: r is increasing and convex, bracket [lo, hi] kept so a
   // step beyond it (the first one overshoots, by convexity) bisects instead.
   double lo = 0, hi = s_max, s = 0;
   for (int it = 0; it < 200; ++it) {
     double r = 0, dr = 0;
     for (size_t i = 0; i < h.size(); ++i) {
+      if (h[i] == 0) continue;
       const double c2 = n[i] * n[i] - s * s;
       const double root = std::sqrt(c2);
       r += h[i] * s / root;
       dr += h[i] * n[i] * n[i] / (c2 * root);
     }
     const double f = r - lateral;
+    if (std::fabs(f) <= 1e-13 * lateral) return s;
     if (f < 0) lo = s;
     else hi = s;
-    if (std::fabs(f) <= 1e-13 * lateral) return s;
     double next = s - f / dr;
     if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
-    if (next == s) return s;
+    // Converged to the float resolution of s (near grazing r' is huge, so |f|
+    // cannot get below its rounding); a bracket closed on s_max means unreachable.
+    if (hi - lo <= 1e-15 * s_max) return hi < s_max ? std::optional<double>(s) : std::nullopt;
     s = next;
   }
   return std::nullopt;
@@ -86,6 +90,7 @@ std::optional<double> solve_planar_invariant(std::span<const double> h, std::spa
 double planar_solid_angle_per_area(std::span<const double> h, std::span<const double> n, double s) {
   double q = 0, dr = 0;  // r/s and dr/ds
   for (size_t i = 0; i < h.size(); ++i) {
+    if (h[i] == 0) continue;
     const double c2 = n[i] * n[i] - s * s;
     q += h[i] / std::sqrt(c2);
     dr += h[i] * n[i] * n[i] / (c2 * std::sqrt(c2));
