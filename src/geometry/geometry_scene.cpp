@@ -419,6 +419,21 @@ bool GeometryScene::occluded(const Ray& ray, float t_max) const {
   return r.tfar < 0.f;
 }
 
+bool GeometryScene::flat_face(int shape_id, int prim_id) const {
+  const auto& shape = impl_->shapes[shape_id];
+  if (std::holds_alternative<BoxShape>(shape)) return true;
+  const auto* m = std::get_if<MeshShape>(&shape);
+  if (!m) return false;
+  const TriangleMesh& mesh = m->mesh;
+  if (mesh.normals.empty()) return true;
+  const uint32_t* idx = &mesh.indices[3 * prim_id];
+  const Vec3 ng = normalize(cross(mesh.positions[idx[1]] - mesh.positions[idx[0]],
+                                  mesh.positions[idx[2]] - mesh.positions[idx[0]]));
+  for (int v = 0; v < 3; ++v)
+    if (dot(mesh.normals[idx[v]], ng) < 1.f - 1e-6f) return false;
+  return true;
+}
+
 ShapeSample GeometryScene::sample_area(int shape_id, Point2 u) const {
   const auto& shape = impl_->shapes[shape_id];
   if (const auto* m = std::get_if<MeshShape>(&shape)) {

@@ -56,6 +56,12 @@ class GeometryScene {
   // Any hit with t in (0, t_max]. Thread-safe after commit().
   bool occluded(const Ray& ray, float t_max) const;
 
+  // True when the surface around a hit on (shape_id, prim_id) is a plane with
+  // the face's own normal for shading: box faces, and mesh triangles without
+  // shading normals or whose three vertex normals equal the face normal.
+  // Spheres and smooth-shaded triangles are not.
+  bool flat_face(int shape_id, int prim_id) const;
+
   ShapeSample sample_area(int shape_id, Point2 u) const;
   float area(int shape_id) const;  // m²
   int shape_count() const;

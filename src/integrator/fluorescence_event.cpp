@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/sampling.h"
+#include "integrator/specular_connection.h"
 
 namespace chlorovdb {
 
@@ -123,8 +124,15 @@ float direct_excitation(const Scene& scene, const FluorescentPigment& fp, const 
   const float lp = sample_excitation(es, rng.uniform(), &pdf_lambda);
   *lambda_excitation = lp;
   SampledWavelengths wl = SampledWavelengths::single(lp);
-  const auto ls = sample_Li(scene.lights[pick->index], LightSampleContext{x, Vec3{}},
-                            Point2{rng.uniform(), rng.uniform()}, wl, scene.geometry);
+  const Point2 u_light{rng.uniform(), rng.uniform()};
+  if (scene.settings.excitation_connect) {
+    PreparedMedia media(scene, wl);
+    if (const auto fluence = connect_through_dielectrics(scene, x, medium, pick->index, u_light, media, rng)) {
+      ++stats.excitation_rays;
+      return lp * kAbsorptionPerMolarExtinction * fp.epsilon(lp) * c * *fluence / (pick->pmf * pdf_lambda);
+    }
+  }
+  const auto ls = sample_Li(scene.lights[pick->index], LightSampleContext{x, Vec3{}}, u_light, wl, scene.geometry);
   if (!ls || ls->L.is_black() || !(ls->pdf > 0.f)) return 0.f;
   ++stats.excitation_rays;
   PreparedMedia media(scene, wl);
@@ -173,6 +181,7 @@ float indirect_excitation(const Scene& scene, const FluorescentPigment& fp, cons
   const Vec3 w = sample_uniform_sphere(Point2{rng.uniform(), rng.uniform()});
   PathOptions options;
   options.skip_emitters_on_first_segment = true;
+  options.skip_emitters_the_connection_owns = scene.settings.excitation_connect;
   options.fluorescence_depth = depth + 1;
   const PathRadiance sub = trace_path_from(scene, Ray{x, w}, medium, wl, rng, stats, options);
   const float radiance = sub.fluorescence[0] + sub.other[0];

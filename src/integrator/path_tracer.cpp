@@ -4,6 +4,7 @@
 
 #include "core/sampling.h"
 #include "integrator/fluorescence_event.h"
+#include "integrator/specular_connection.h"
 #include "integrator/transport.h"
 #include "tracking/sample_t_maj.h"
 
@@ -66,6 +67,11 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
   // sliver, where strongly absorbed (UV) excitation deposits most of its energy.
   Vec3 segment_start = ray.o;
   SurfaceHit prev_hit;  // storage for prev.origin.hit
+  // Dielectric transmissions since the origin while nothing else happened: the
+  // chain connection_owns() compares with the excitation connection's.
+  const Vec3 origin = ray.o;
+  SpecularChain walked;
+  bool walked_only_glass = options.skip_emitters_the_connection_owns;
   ++stats.paths;
 
   // Light leaving an emitter toward the path, MIS-weighted against light sampling.
@@ -157,6 +163,7 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
                 specular_bounce = false;
                 count_emitters = true;
                 scattered = true;
+                walked_only_glass = false;
                 ray = Ray{p, ps.wi};
                 segment_start = p;
                 return false;
@@ -204,7 +211,7 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
     }
 
     const ShapeBinding& binding = scene.shapes[hit->shape_id];
-    if (binding.area_light >= 0)
+    if (binding.area_light >= 0 && !(walked_only_glass && connection_owns(scene, origin, hit->p, walked)))
       add_emitted(Le_area(std::get<AreaLight>(scene.lights[binding.area_light]), hit->ng, -ray.d, lambda),
                   binding.area_light, &*hit);
 
@@ -229,6 +236,14 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
     }
     const auto bs = bsdf.sample(wo, rng.uniform(), Point2{rng.uniform(), rng.uniform()});
     if (!bs || bs->pdf == 0.f) break;
+    if (walked_only_glass) {
+      const bool glass_transmission = bs->is_specular && bs->is_transmission &&
+                                      std::holds_alternative<Dielectric>(scene.materials[binding.material]);
+      if (glass_transmission && walked.count < kMaxSpecularChain)
+        walked.faces[walked.count++] = ChainFace{hit->shape_id, hit->prim_id, hit->ng, dot(hit->ng, hit->p), hit->p};
+      else
+        walked_only_glass = false;
+    }
     beta *= bs->f * std::fabs(dot(bs->wi, hit->ns)) / bs->pdf;
     r_l = r_u / bs->pdf;
     specular_bounce = bs->is_specular;

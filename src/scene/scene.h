@@ -56,6 +56,10 @@ struct RenderSettings {
   // vessel), or stop (exact; light through glass then arrives only by `full`
   // mode's continuation paths, which cannot reach delta lights). docs/fluorescence.md.
   bool excitation_through_glass = true;
+  // "connect": excitation rays solve for the refracted path through parallel
+  // planar glass to point, spot, distant and area lights (integrator/
+  // specular_connection.h); anything else through glass is stopped, as "block".
+  bool excitation_connect = false;
   // Both kept to measure what the defaults buy (docs/fluorescence.md); neither
   // applies to the `reference` estimator, which always draws λ' uniformly below
   // λ and uses Q as a roulette, as the thesis does.

@@ -77,7 +77,9 @@ RenderSettings read_render_settings(ParamReader& top, const SceneOverrides& o, s
     *fluorescence = r->get_enum("fluorescence", "auto", kFluorescenceModes);
     s.spectral_bins = r->get_int("spectral_bins", 0, 0, 4096);
     s.skip_unneeded_work = r->get_bool("skip_unneeded_work", true);
-    s.excitation_through_glass = r->get_enum("excitation_through_glass", "fresnel", {"fresnel", "block"}) == "fresnel";
+    const std::string glass = r->get_enum("excitation_through_glass", "fresnel", {"fresnel", "block", "connect"});
+    s.excitation_through_glass = glass == "fresnel";
+    s.excitation_connect = glass == "connect";
     s.excitation_sampling = r->get_enum("excitation_sampling", "importance", {"importance", "uniform"}) == "uniform"
                                 ? ExcitationSampling::uniform
                                 : ExcitationSampling::importance;

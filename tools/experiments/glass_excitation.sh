@@ -4,6 +4,8 @@
 #   A' : an area light in the same direction, same approximation
 #   B  : the same area light, `full` mode, excitation rays stopped by glass (exact:
 #        light reaches the solution only through refracting continuation paths)
+#   C  : the same, excitation rays solving for the refracted path through the planar walls
+#        (`connect`, exact with `full`), at the fast spp
 # Prints the mean fluorescence radiance of each and the relative differences.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -45,9 +47,10 @@ distant=", \"lights\": [{\"type\": \"distant\", \"direction\": [-1, 0, 0], \"spe
 scene "" direct fresnel "$distant" > "$out/A.json"
 scene "$area" direct fresnel "" > "$out/A_area.json"
 scene "$area" full block "" > "$out/B.json"
-for s in A A_area; do "$bin" render "$out/$s.json" -o "$out/$s.exr" --spp "$spp_fast" -q; done
+scene "$area" full connect "" > "$out/C.json"
+for s in A A_area C; do "$bin" render "$out/$s.json" -o "$out/$s.exr" --spp "$spp_fast" -q; done
 "$bin" render "$out/B.json" -o "$out/B.exr" --spp "$spp_exact" -q
 "$bin" render "$out/B.json" -o "$out/B_seed2.exr" --spp "$spp_exact" --seed 2 -q  # noise estimate
-for s in A A_area B B_seed2; do
+for s in A A_area B B_seed2 C; do
   printf '%s ' "$s"; oiiotool "$out/$s.exr" --ch fluorescence.R,fluorescence.G,fluorescence.B --printstats 2>/dev/null | grep "Stats Avg" | sed 's/.*Avg://'
 done

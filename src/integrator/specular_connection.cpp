@@ -1,0 +1,269 @@
+#include "integrator/specular_connection.h"
+
+#include <cmath>
+#include <limits>
+
+namespace chlorovdb {
+
+namespace {
+
+// Same tolerance GeometryScene uses for shadow rays: stop this fraction short of a target.
+constexpr float kStopShort = 1e-4f;
+// Normals this close are one plane orientation (cos of ~0.08°).
+constexpr float kParallelCos = 1.f - 1e-6f;
+
+const Dielectric& dielectric_of(const Scene& scene, int shape_id) {
+  return std::get<Dielectric>(scene.materials[scene.shapes[shape_id].material]);
+}
+
+// Solved vertices sit on a plane up to the rounding of x + H N + R e.
+SurfaceHit vertex_hit(const ChainFace& f, const Vec3& p) {
+  SurfaceHit h;
+  h.p = p;
+  h.ng = h.ns = f.ng;
+  h.shape_id = f.shape_id;
+  h.prim_id = f.prim_id;
+  h.p_error = 64.f * 0x1p-24f * (max_component(abs(p)) + 1e-3f);
+  return h;
+}
+
+// True when the ray from `ray.o` reaches face `f` at distance `dist` before any
+// other surface that is not pass-through.
+bool leg_reaches_face(const Scene& scene, Ray ray, float dist, const ChainFace& f) {
+  const float slack = 1e-3f * dist + 1e-6f;
+  float travelled = 0.f;
+  for (int crossings = 0; crossings < 256; ++crossings) {
+    const auto hit = scene.geometry.intersect(ray, dist + slack - travelled);
+    if (!hit) return false;
+    const ShapeBinding& b = scene.shapes[hit->shape_id];
+    if (!is_pass_through(scene, b)) {
+      const ChainFace g{hit->shape_id, hit->prim_id, hit->ng, dot(hit->ng, hit->p), hit->p};
+      return same_face(f, g) && std::fabs(travelled + hit->t - dist) <= slack;
+    }
+    travelled += hit->t;
+    ray = scene.geometry.spawn_ray(*hit, ray.d);
+  }
+  return false;
+}
+
+}  // namespace
+
+double planar_lateral_offset(std::span<const double> h, std::span<const double> n, double s) {
+  double r = 0;
+  for (size_t i = 0; i < h.size(); ++i)
+    if (h[i] > 0) r += h[i] * s / std::sqrt(n[i] * n[i] - s * s);
+  return r;
+}
+
+std::optional<double> solve_planar_invariant(std::span<const double> h, std::span<const double> n, double lateral) {
+  // Every layer bounds s (a ray must exist in each, even one of zero thickness);
+  // r(s) grows without bound only if a layer of the smallest index has thickness.
+  double s_max = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < h.size(); ++i) s_max = std::min(s_max, n[i]);
+  if (!(lateral > 0)) return 0.0;
+  // Safeguarded Newton: r is increasing and convex, bracket [lo, hi] kept so a
+  // step beyond it (the first one overshoots, by convexity) bisects instead.
+  double lo = 0, hi = s_max, s = 0;
+  for (int it = 0; it < 200; ++it) {
+    double r = 0, dr = 0;
+    for (size_t i = 0; i < h.size(); ++i) {
+      if (h[i] == 0) continue;
+      const double c2 = n[i] * n[i] - s * s;
+      const double root = std::sqrt(c2);
+      r += h[i] * s / root;
+      dr += h[i] * n[i] * n[i] / (c2 * root);
+    }
+    const double f = r - lateral;
+    if (std::fabs(f) <= 1e-13 * lateral) return s;
+    if (f < 0) lo = s;
+    else hi = s;
+    double next = s - f / dr;
+    if (!(next > lo && next < hi)) next = 0.5 * (lo + hi);
+    // Converged to the float resolution of s (near grazing r' is huge, so |f|
+    // cannot get below its rounding); a bracket closed on s_max means unreachable.
+    if (hi - lo <= 1e-15 * s_max) return hi < s_max ? std::optional<double>(s) : std::nullopt;
+    s = next;
+  }
+  return std::nullopt;
+}
+
+double planar_solid_angle_per_area(std::span<const double> h, std::span<const double> n, double s) {
+  double q = 0, dr = 0;  // r/s and dr/ds
+  for (size_t i = 0; i < h.size(); ++i) {
+    if (h[i] == 0) continue;
+    const double c2 = n[i] * n[i] - s * s;
+    q += h[i] / std::sqrt(c2);
+    dr += h[i] * n[i] * n[i] / (c2 * std::sqrt(c2));
+  }
+  const double n0 = n.front(), nk = n.back();
+  const double cos0 = std::sqrt(std::max(0.0, 1 - s * s / (n0 * n0)));
+  const double cosk = std::sqrt(std::max(0.0, 1 - s * s / (nk * nk)));
+  return 1 / (n0 * n0 * q * dr * cos0 * cosk);
+}
+
+bool same_face(const ChainFace& a, const ChainFace& b) {
+  return a.shape_id == b.shape_id && dot(a.ng, b.ng) > kParallelCos &&
+         std::fabs(a.offset - b.offset) <= 1e-6f + 1e-5f * std::fabs(a.offset);
+}
+
+std::optional<SpecularChain> straight_line_chain(const Scene& scene, const Vec3& x, const Vec3& y, bool to_infinity) {
+  SpecularChain c;
+  float t_max;
+  Ray ray;
+  if (to_infinity) {
+    ray = Ray{x, normalize(y)};
+    t_max = kInfinity;
+  } else {
+    const float dist = length(y - x);
+    if (!(dist > 0.f)) return std::nullopt;
+    ray = Ray{x, (y - x) / dist};
+    t_max = dist * (1.f - kStopShort);
+  }
+  for (int crossings = 0; crossings < 256; ++crossings) {
+    const auto hit = scene.geometry.intersect(ray, t_max);
+    if (!hit) return c;
+    const ShapeBinding& b = scene.shapes[hit->shape_id];
+    if (!is_pass_through(scene, b)) {
+      if (!std::holds_alternative<Dielectric>(scene.materials[b.material]) || c.count == kMaxSpecularChain)
+        return std::nullopt;
+      const ChainFace f{hit->shape_id, hit->prim_id, hit->ng, dot(hit->ng, hit->p), hit->p};
+      if (!scene.geometry.flat_face(hit->shape_id, hit->prim_id)) c.planar_parallel = false;
+      if (c.count > 0 && std::fabs(dot(f.ng, c.faces[0].ng)) < kParallelCos) c.planar_parallel = false;
+      c.faces[c.count++] = f;
+    }
+    ray = to_infinity ? scene.geometry.spawn_ray(*hit, ray.d) : scene.geometry.spawn_ray_to(*hit, y, &t_max);
+  }
+  return std::nullopt;
+}
+
+bool connection_owns(const Scene& scene, const Vec3& x, const Vec3& y, const SpecularChain& walked) {
+  if (walked.count == 0) return false;  // straight to the light: the first-segment rule owns it
+  const auto c = straight_line_chain(scene, x, y, false);
+  if (!c || !c->planar_parallel || c->count != walked.count) return false;
+  for (int i = 0; i < c->count; ++i)
+    if (!same_face(c->faces[i], walked.faces[i])) return false;
+  return true;
+}
+
+std::optional<RefractedPath> solve_refracted_path(const Scene& scene, const SpecularChain& chain, const Vec3& x,
+                                                  const Vec3& y, bool to_infinity, float lambda_nm) {
+  if (!chain.planar_parallel) return std::nullopt;
+  const int k = chain.count;
+  const Vec3 toward = to_infinity ? y : y - x;
+  Vec3 N = k > 0 ? chain.faces[0].ng : normalize(toward);
+  if (dot(N, toward) < 0.f) N = -N;
+  RefractedPath P;
+  P.count = k;
+  std::array<double, kMaxSpecularChain + 1> h{};
+  P.n[0] = 1;
+  double z_prev = dot(N, x);
+  for (int j = 0; j < k; ++j) {
+    const ChainFace& f = chain.faces[j];
+    const double c = dot(N, f.p);
+    h[j] = std::max(0.0, c - z_prev);
+    z_prev = c;
+    const float eta = ior_at(dielectric_of(scene, f.shape_id), lambda_nm);
+    P.n[j + 1] = P.n[j] * (dot(toward, f.ng) < 0.f ? eta : 1.f / eta);  // entering: n_inside / n_outside
+  }
+  const std::span<const double> hs(h.data(), k + 1), ns(P.n.data(), k + 1);
+  Vec3 lateral = toward - N * dot(toward, N);
+  const float lateral_len = length(lateral);
+  const Vec3 e = lateral_len > 0.f ? lateral / lateral_len : Vec3(0.f);
+  double s;
+  if (to_infinity) {
+    s = P.n[k] * std::min(1.0, double(lateral_len) / double(length(toward)));
+    for (int i = 0; i <= k; ++i)
+      if (!(s < P.n[i])) return std::nullopt;  // total internal reflection on the way in
+  } else {
+    h[k] = std::max(0.0, double(dot(N, y)) - z_prev);
+    const auto solved = solve_planar_invariant(hs, ns, lateral_len);
+    if (!solved) return std::nullopt;
+    s = *solved;
+    P.solid_angle_per_area = planar_solid_angle_per_area(hs, ns, s);
+  }
+  double H = 0, R = 0;
+  for (int i = 0; i <= k; ++i) {
+    const double sin_i = s / P.n[i];
+    P.cos_theta[i] = std::sqrt(std::max(0.0, 1 - sin_i * sin_i));
+    P.dir[i] = normalize(N * float(P.cos_theta[i]) + e * float(sin_i));
+    if (i == k) break;
+    H += h[i];
+    R += h[i] * sin_i / P.cos_theta[i];
+    P.vertex[i] = x + N * float(H) + e * float(R);
+  }
+  return P;
+}
+
+std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3& x, int medium, int light_index,
+                                                 Point2 u, PreparedMedia& media, Rng& rng) {
+  const Light& light = scene.lights[light_index];
+  if (std::holds_alternative<EnvironmentLight>(light)) return std::nullopt;
+  const SampledWavelengths& wl = media.lambda();
+  Vec3 y, n_light;
+  float pdf_area = 1.f;
+  const bool to_infinity = std::holds_alternative<DistantLight>(light);
+  if (const auto* area = std::get_if<AreaLight>(&light)) {
+    const ShapeSample ss = scene.geometry.sample_area(area->shape_id, u);
+    y = ss.p, n_light = ss.n, pdf_area = ss.pdf_area;
+  } else if (const auto* point = std::get_if<PointLight>(&light)) {
+    y = point->position;
+  } else if (const auto* spot = std::get_if<SpotLight>(&light)) {
+    y = spot->position;
+  } else {
+    y = -std::get<DistantLight>(light).direction;  // toward the light
+  }
+  const auto chain = straight_line_chain(scene, x, y, to_infinity);
+  if (!chain) return 0.f;
+  const auto path = solve_refracted_path(scene, *chain, x, y, to_infinity, wl[0]);
+  if (!path) return 0.f;
+  const int k = path->count;
+
+  // Each leg: reaches its face and nothing else, Fresnel at the face, medium transmittance.
+  float weight = 1.f;
+  int leg_medium = medium;
+  SurfaceHit prev;
+  for (int j = 0; j < k; ++j) {
+    const ChainFace& f = chain->faces[j];
+    const Vec3& v = path->vertex[j];
+    const Vec3& d = path->dir[j];
+    const Ray ray = j == 0 ? Ray{x, d} : scene.geometry.spawn_ray(prev, d);
+    if (!leg_reaches_face(scene, ray, length(v - ray.o), f)) return 0.f;
+    const SurfaceHit here = vertex_hit(f, v);
+    // Traced from the face back to the previous vertex: spawn_ray_to stops short
+    // of its target, and a medium point has no surface to stop short of.
+    const SampledSpectrum T = j == 0 ? trace_transmittance(scene, ShadowOrigin{v, leg_medium, &here}, -d, x, false,
+                                                           media, rng, DielectricCrossing::block)
+                                     : trace_transmittance(scene, ShadowOrigin{prev.p, leg_medium, &prev}, d, v, false,
+                                                           media, rng, DielectricCrossing::block);
+    weight *= T[0];
+    if (weight == 0.f) return 0.f;
+    const ShapeBinding& b = scene.shapes[f.shape_id];
+    weight *= 1.f - fresnel_dielectric(dot(-d, f.ng), ior_at(dielectric_of(scene, f.shape_id), wl[0]));
+    if (weight == 0.f) return 0.f;
+    leg_medium = medium_after_crossing(b, f.ng, d);
+    prev = here;
+  }
+  const Vec3& d_last = path->dir[k];
+  const ShadowOrigin from = k == 0 ? ShadowOrigin{x, medium, nullptr} : ShadowOrigin{prev.p, leg_medium, &prev};
+  weight *= trace_transmittance(scene, from, d_last, to_infinity ? prev.p + d_last * kInfinity : y, to_infinity, media,
+                                rng, DielectricCrossing::block)[0];
+  if (weight == 0.f) return 0.f;
+
+  if (to_infinity) {
+    // A collimated beam: irradiance across the beam changes by the ratio of its
+    // cross-sections, cos θ_last / cos θ_0 (power conservation at every plane).
+    const auto& distant = std::get<DistantLight>(light);
+    return distant.L.sample(wl)[0] * distant.scale * weight * float(path->cos_theta[k] / path->cos_theta[0]);
+  }
+  // Radiance compressed into the denser medium: (n_x / n_light)², n_x = 1 here.
+  const float g = float(path->solid_angle_per_area / (path->n[k] * path->n[k]));
+  if (const auto* area = std::get_if<AreaLight>(&light)) {
+    const float Le = Le_area(*area, n_light, -d_last, wl)[0];
+    return Le * weight * g * std::fabs(dot(n_light, d_last)) / pdf_area;
+  }
+  if (const auto* point = std::get_if<PointLight>(&light)) return point->I.sample(wl)[0] * point->scale * weight * g;
+  const auto& spot = std::get<SpotLight>(light);
+  return spot.I.sample(wl)[0] * spot.scale * spot_falloff(spot, -d_last) * weight * g;
+}
+
+}  // namespace chlorovdb
