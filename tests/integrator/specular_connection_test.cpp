@@ -5,8 +5,10 @@
 #include "integrator/specular_connection.h"
 
 #include <cmath>
+#include <cstdio>
 #include <functional>
 
+#include "core/sampling.h"
 #include "test_scenes.h"
 
 namespace chlorovdb::test {
@@ -207,6 +209,51 @@ TEST(SpecularConnection, ContinuationThroughWallIsOwned) {
   SpecularChain other = *chain;
   other.faces[1].offset += 0.01f;
   EXPECT_FALSE(connection_owns(scene, x, y, other));
+}
+
+}  // namespace
+}  // namespace chlorovdb::test
+
+namespace chlorovdb::test {
+namespace {
+
+TEST(SpecularConnection, PartitionWithContinuationsCountsEachPathOnce) {
+  // Fluence at x by paths in uniform directions (what `full` mode's
+  // continuation does): all of them, against the ones the connection does not
+  // own plus the connection's estimate. Agreement within 4σ; the owned share
+  // must be most of it (the walls' reflections are the rest).
+  const Scene scene = load_scene(write_scene("connect_partition", wall_scene(R"(,
+    {"type": "quad", "corner": [0.3, -0.1, 0.1], "edge_u": [0, 0.2, 0], "edge_v": [0, 0, -0.2],
+     "emission": {"spectrum": {"gaussian": [420, 8]}, "scale": 5}}])")));
+  Rng rng(11, 0);
+  PathStats stats;
+  auto continuation = [&](bool drop_owned) {
+    Estimate e;
+    PathOptions options;
+    options.skip_emitters_on_first_segment = true;
+    options.skip_emitters_the_connection_owns = drop_owned;
+    for (int i = 0; i < 400000; ++i) {
+      SampledWavelengths wl = SampledWavelengths::single(kLambda);
+      const Vec3 w = sample_uniform_sphere(Point2{rng.uniform(), rng.uniform()});
+      const PathRadiance L = trace_path_from(scene, Ray{Vec3(0.f), w}, 0, wl, rng, stats, options);
+      e.add(double(L.other[0] + L.fluorescence[0]) * 4 * kPi);
+    }
+    return e;
+  };
+  const Estimate all = continuation(false), rest = continuation(true);
+  Estimate connect;
+  SampledWavelengths wl = SampledWavelengths::single(kLambda);
+  PreparedMedia media(scene, wl);
+  for (int i = 0; i < 100000; ++i)
+    connect.add(*connect_through_dielectrics(scene, Vec3(0.f), 0, 0, Point2{rng.uniform(), rng.uniform()}, media, rng));
+  const double sigma = std::sqrt(all.sigma() * all.sigma() + rest.sigma() * rest.sigma() + connect.sigma() * connect.sigma());
+  EXPECT_NEAR(all.mean(), rest.mean() + connect.mean(), 4 * sigma)
+      << "all " << all.mean() << " ± " << all.sigma() << ", rest " << rest.mean() << " ± " << rest.sigma()
+      << ", connect " << connect.mean() << " ± " << connect.sigma();
+  std::printf("fluence: all paths %.5g ± %.2g, not owned %.5g ± %.2g, connection %.5g ± %.2g\n", all.mean(),
+              all.sigma(), rest.mean(), rest.sigma(), connect.mean(), connect.sigma());
+  EXPECT_LT(rest.mean(), 0.5 * all.mean());
+  EXPECT_LT(all.sigma(), 0.05 * all.mean());
 }
 
 }  // namespace
