@@ -10,7 +10,8 @@ namespace chlorovdb {
 std::optional<std::string> range_problem(double v, double lo, double hi) {
   if (!std::isfinite(v)) return "must be finite";
   if (v >= lo && v <= hi) return std::nullopt;
-  if (hi >= kMaxFloatParam && lo <= -kMaxFloatParam) return fmt::format("must lie within ±{:g} (single precision)", kMaxFloatParam);
+  if ((v > hi && hi >= kMaxFloatParam) || (v < lo && lo <= -kMaxFloatParam))
+    return fmt::format("must lie within ±{:g} (single precision)", kMaxFloatParam);
   if (hi >= kMaxFloatParam) return fmt::format("must be >= {:g}", lo);
   if (lo <= -kMaxFloatParam) return fmt::format("must be <= {:g}", hi);
   return fmt::format("must be in [{:g}, {:g}]", lo, hi);

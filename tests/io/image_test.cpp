@@ -199,7 +199,10 @@ TEST(ExrWrite, ConcurrentWritersInOneProcessNeverTearTheFile) {
   reader.join();
   EXPECT_EQ(torn, 0);
   int files = 0;
-  for (const auto& e : std::filesystem::directory_iterator(dir)) ++files, EXPECT_EQ(e.path(), path);
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    ++files;
+    EXPECT_EQ(e.path(), path);
+  }
   EXPECT_EQ(files, 1);
   std::filesystem::remove_all(dir);
 }
