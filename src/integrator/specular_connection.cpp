@@ -219,6 +219,10 @@ std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3&
   const int k = path->count;
 
   // Each leg: reaches its face and nothing else, Fresnel at the face, medium transmittance.
+  // Medium transmittance of one leg: the shared light connection, stopped by any glass.
+  const auto leg_transmittance = [&](const ShadowOrigin& from, const LightTarget& to) {
+    return connect_to_light(scene, from, to, media, rng, ConnectionOptions{}).T;
+  };
   float weight = 1.f;
   int leg_medium = medium;
   SurfaceHit prev;
@@ -231,10 +235,8 @@ std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3&
     const SurfaceHit here = vertex_hit(f, v);
     // Traced from the face back to the previous vertex: spawn_ray_to stops short
     // of its target, and a medium point has no surface to stop short of.
-    const SampledSpectrum T = j == 0 ? trace_transmittance(scene, ShadowOrigin{v, leg_medium, &here}, -d, x, false,
-                                                           media, rng, DielectricCrossing::block)
-                                     : trace_transmittance(scene, ShadowOrigin{prev.p, leg_medium, &prev}, d, v, false,
-                                                           media, rng, DielectricCrossing::block);
+    const SampledSpectrum T = j == 0 ? leg_transmittance(ShadowOrigin{v, leg_medium, &here}, LightTarget{-d, x})
+                                     : leg_transmittance(ShadowOrigin{prev.p, leg_medium, &prev}, LightTarget{d, v});
     weight *= T[0];
     if (weight == 0.f) return 0.f;
     const ShapeBinding& b = scene.shapes[f.shape_id];
@@ -245,8 +247,7 @@ std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3&
   }
   const Vec3& d_last = path->dir[k];
   const ShadowOrigin from = k == 0 ? ShadowOrigin{x, medium, nullptr} : ShadowOrigin{prev.p, leg_medium, &prev};
-  weight *= trace_transmittance(scene, from, d_last, to_infinity ? prev.p + d_last * kInfinity : y, to_infinity, media,
-                                rng, DielectricCrossing::block)[0];
+  weight *= leg_transmittance(from, LightTarget{d_last, to_infinity ? prev.p + d_last * kInfinity : y, to_infinity})[0];
   if (weight == 0.f) return 0.f;
 
   if (to_infinity) {
