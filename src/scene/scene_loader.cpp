@@ -449,6 +449,7 @@ Scene load_scene(const std::filesystem::path& file, const SceneOverrides& overri
                         : light_power(light, scene.geometry, kLambdaMin, kLambdaMax));
   scene.light_sampler = LightSampler(relative_weights(power));
   setup_fluorescence(scene, fluorescence_mode);
+  scene.resolve_medium_policies();
   return scene;
 }
 
