@@ -237,7 +237,7 @@ SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, 
   if (!(c > 0.f)) return {};
   ++stats.fluorescence_events;
 
-  const SampledSpectrum T = transmittance(ray, ds.t, lambda, m, media[medium], estimator_for(scene, medium), rng);
+  const SampledSpectrum T = transmittance(ray, ds.t, lambda, m, media[medium], scene.transmittance_estimator(medium), rng);
   if (T.is_black()) return {};
 
   SampledSpectrum j;  // emission per unit absorbed "λ'·μ_a·Φ", filled per lane below

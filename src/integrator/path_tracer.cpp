@@ -110,7 +110,7 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
         // decision kills the other lanes. Light sampling does the same, so the
         // MIS weights stay consistent.
         beta *=
-            transmittance(ray, t_end, lambda, scene.media[medium], media[medium], estimator_for(scene, medium), rng);
+            transmittance(ray, t_end, lambda, scene.media[medium], media[medium], scene.transmittance_estimator(medium), rng);
         if (beta.is_black()) break;
       } else {
         // Delta tracking with the hero wavelength; other lanes are weighted (spectral MIS).

@@ -72,13 +72,6 @@ float straight_through_transmission(const Vec3* ng, const float* ior, int count,
 namespace {
 }  // namespace
 
-TransmittanceEstimator estimator_for(const Scene& scene, int medium) {
-  if (scene.settings.transmittance_auto) return automatic_transmittance_estimator(scene.media[medium]);
-  if (scene.settings.transmittance == TransmittanceEstimator::closed_form && !is_homogeneous(scene.media[medium]))
-    return TransmittanceEstimator::residual_ratio;
-  return scene.settings.transmittance;
-}
-
 LightConnection connect_to_light(const Scene& scene, const ShadowOrigin& from, const LightTarget& to,
                                  PreparedMedia& media, Rng& rng, const ConnectionOptions& options) {
   LightConnection c;
@@ -134,7 +127,7 @@ LightConnection connect_to_light(const Scene& scene, const ShadowOrigin& from, c
       } else {
         // Absorbing-only media (as the camera path treats them) and connections
         // without MIS: a plain transmittance weight.
-        const TransmittanceEstimator estimator = options.forced ? *options.forced : estimator_for(scene, medium);
+        const TransmittanceEstimator estimator = options.forced ? *options.forced : scene.transmittance_estimator(medium);
         c.T *= transmittance(ray, t_end, lambda, scene.media[medium], media[medium], estimator, rng);
       }
       if (c.T.is_black()) return blocked();

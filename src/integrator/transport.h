@@ -107,7 +107,4 @@ LightConnection connect_to_light(const Scene& scene, const ShadowOrigin& from, c
 // media, and light reflected between faces. 0 under total internal reflection.
 float straight_through_transmission(const Vec3* ng, const float* ior, int count, const Vec3& wi);
 
-// The estimator the settings ask for in `medium` (closed form if homogeneous under `auto`).
-TransmittanceEstimator estimator_for(const Scene& scene, int medium);
-
 }  // namespace chlorovdb

@@ -68,6 +68,16 @@ struct RenderSettings {
   QuantumYieldMode quantum_yield_mode = QuantumYieldMode::weight;
 };
 
+// How the integrator treats one medium, resolved once at load from the settings
+// so that no segment recomputes it.
+struct MediumPolicy {
+  // Absorbing-only media need no collision sampling: transmittance is a weight.
+  // Not for the reference estimator, whose fluorescence events are absorptions.
+  bool track_by_transmittance = false;
+  // The estimator the settings ask for here (closed form if homogeneous under `auto`).
+  TransmittanceEstimator estimator = TransmittanceEstimator::residual_ratio;
+};
+
 // What a surface is made of and what lies on each side of it.
 struct ShapeBinding {
   int material = -1;  // index into Scene::materials; -1: emitter-only shape
@@ -89,16 +99,29 @@ struct Scene {
   std::vector<Medium> media;
   std::vector<std::string> medium_names;
   std::vector<bool> medium_scatters;  // anything in it scatters (molecules or particles)
+  std::vector<MediumPolicy> medium_policy;  // per medium, resolved at load (resolve_medium_policies)
   std::vector<std::vector<FluorescentPigment>> fluorescence;  // per medium
   int camera_medium = -1;
   std::vector<std::string> warnings;  // loader's doubts about the scene (e.g. a grid's length unit); printed by render
   std::vector<std::string> notes;     // what the loader changed (e.g. a double grid converted to float); printed by render
 
-  // Absorbing-only media need no collision sampling: transmittance is a weight.
-  // Not for the reference estimator, whose fluorescence events are absorptions.
-  bool track_by_transmittance(int medium) const {
-    return settings.skip_unneeded_work && !medium_scatters[medium] &&
-           !(settings.fluorescence == FluorescenceMode::reference && !fluorescence[medium].empty());
+  bool track_by_transmittance(int medium) const { return medium_policy[medium].track_by_transmittance; }
+  TransmittanceEstimator transmittance_estimator(int medium) const { return medium_policy[medium].estimator; }
+
+  // Fills medium_policy from the settings, media and fluorescence (the loader
+  // calls it last; call it again after changing any of them).
+  void resolve_medium_policies() {
+    medium_policy.assign(media.size(), MediumPolicy{});
+    for (size_t m = 0; m < media.size(); ++m) {
+      MediumPolicy& p = medium_policy[m];
+      p.track_by_transmittance =
+          settings.skip_unneeded_work && !medium_scatters[m] &&
+          !(settings.fluorescence == FluorescenceMode::reference && !fluorescence[m].empty());
+      if (settings.transmittance_auto) p.estimator = automatic_transmittance_estimator(media[m]);
+      else if (settings.transmittance == TransmittanceEstimator::closed_form && !media[m].homogeneous())
+        p.estimator = TransmittanceEstimator::residual_ratio;
+      else p.estimator = settings.transmittance;
+    }
   }
 
   bool has_fluorescence() const {

@@ -536,6 +536,7 @@ Scene load_scene(const nlohmann::json& json, const std::filesystem::path& file, 
                         : light_power(light, scene.geometry, kLambdaMin, kLambdaMax));
   scene.light_sampler = LightSampler(relative_weights(power));
   setup_fluorescence(scene, fluorescence_mode);
+  scene.resolve_medium_policies();
   return scene;
 }
 
