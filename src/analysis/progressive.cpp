@@ -98,11 +98,27 @@ Image combine_means(const Image& a, int n_a, const Image& b, int n_b) {
   if (n_a < 0 || n_b < 0 || n_a + n_b == 0) throw std::invalid_argument("combine_means needs positive sample counts");
   Image r = b;
   const double wa = double(n_a) / (n_a + n_b), wb = double(n_b) / (n_a + n_b);
+  auto layer_of = [](const Image& image, std::string_view name) {
+    const ImageLayer* l = image.find_layer(name);
+    if (!l) throw std::invalid_argument(fmt::format("cannot combine images: layer '{}' is missing", name));
+    return l;
+  };
   for (ImageLayer& lb : r.layers) {
-    const ImageLayer* la = a.find_layer(lb.name);
-    if (!la || la->channels != lb.channels || la->pixels.size() != lb.pixels.size())
+    const ImageLayer* la = layer_of(a, lb.name);
+    if (la->channels != lb.channels || la->pixels.size() != lb.pixels.size())
       throw std::invalid_argument("cannot combine images: layer '" + lb.name + "' differs or is missing");
-    for (size_t i = 0; i < lb.pixels.size(); ++i) lb.pixels[i] = float(wa * la->pixels[i] + wb * lb.pixels[i]);
+    if (!is_stderr_layer(lb.name)) {
+      for (size_t i = 0; i < lb.pixels.size(); ++i) lb.pixels[i] = float(wa * la->pixels[i] + wb * lb.pixels[i]);
+      continue;
+    }
+    // A standard error combines through both parts' sums of squares, so it needs both parts' means.
+    const ImageLayer *ma = layer_of(a, stderr_base_name(lb.name)), *mb = layer_of(b, stderr_base_name(lb.name));
+    if (ma->pixels.size() != lb.pixels.size() || mb->pixels.size() != lb.pixels.size())
+      throw std::invalid_argument("cannot combine images: layer '" + lb.name + "' does not match its mean layer");
+    for (size_t i = 0; i < lb.pixels.size(); ++i) {
+      const double sum2 = sum_of_squares(ma->pixels[i], la->pixels[i], n_a) + sum_of_squares(mb->pixels[i], lb.pixels[i], n_b);
+      lb.pixels[i] = float(standard_error(wa * ma->pixels[i] + wb * mb->pixels[i], sum2, n_a + n_b));
+    }
   }
   if (r.layers.size() != a.layers.size()) throw std::invalid_argument("cannot combine images with different layers");
   return r;

@@ -283,6 +283,9 @@ int render(const RenderArgs& a) {
       std::vector<double> v = film.raw_xyz(int(l));
       reduce_sum(v);
       if (root) set_raw_sums(film, int(l), v);
+      std::vector<double> v2 = film.raw_rgb_squares(int(l));
+      reduce_sum(v2);
+      if (root) set_raw_rgb_squares(film, int(l), v2);
     }
     if (film.spectral_bins() > 0) {
       std::vector<double> v = film.raw_spectral();
