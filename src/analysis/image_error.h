@@ -49,8 +49,9 @@ struct LayerError {
 // than kTopPixelShareWarning of it. Empty when neither holds.
 std::vector<std::string> error_warnings(const LayerError& e);
 
-// The reference's own error of a layer, from its standard-error layer: RMS of se and
-// RMS of se / (|r| + sqrt(eps)) (as relMSE regularises), and the relMSE term it adds.
+// The reference's own error of a layer, from its standard-error layer: the RMS of se
+// over pixels and channels, the term it adds to relMSE (as reference_rel_variance),
+// and the layer's mean.
 struct ReferenceSelfError {
   bool available = false;  // the image has "<layer>_stderr"
   double rms_stderr = 0, rel_mse = 0;

@@ -9,6 +9,7 @@
 
 #include <fmt/format.h>
 
+#include "analysis/image_error.h"
 #include "analysis/progressive.h"
 #include "analysis/scene_variant.h"
 #include "cli/commands.h"
@@ -101,6 +102,11 @@ int reference(const ReferenceArgs& a) {
   if (out.extension() != ".exr") out += ".exr";
   if (out.has_parent_path()) std::filesystem::create_directories(out.parent_path());
   const Metadata settings = settings_metadata(scene, a);
+  if (!a.seed)
+    fmt::print(stderr,
+               "warning: no --seed: this reference uses the scene's seed {}, as renders of the scene do; a variant compared "
+               "with it then shares its first samples and its error is underestimated (use e.g. --seed 1000003)\n",
+               scene.settings.seed);
 
   // A previous partial run: check it is the same render, take its mean and count.
   std::optional<Image> previous;
@@ -163,6 +169,10 @@ int reference(const ReferenceArgs& a) {
   std::signal(SIGTERM, SIG_DFL);
   fmt::print(stderr, "{}: {} of {} spp in {}, {:.1f} s this session\n", r.interrupted ? "interrupted" : "done",
              r.spp_done, a.spp, out.string(), r.seconds);
+  for (const std::string layer : {"total", "fluorescence", "nonfluorescence"})
+    if (const ReferenceSelfError e = reference_self_error(r.image, layer); e.available && e.mean != 0)
+      fmt::print(stderr, "own error, layer {}: RMS standard error {:.3e} ({:.3g} % of its mean), adds {:.3e} to relMSE\n", layer,
+                 e.rms_stderr, 100 * e.rms_stderr / std::abs(e.mean), e.rel_mse);
   return r.interrupted ? 130 : 0;
 }
 

@@ -24,6 +24,7 @@
 #include "checkpoint/partition.h"
 #include "cli/commands.h"
 #include "core/error.h"
+#include "film/stopping_rule.h"
 #include "integrator/render.h"
 #include "io/image.h"
 #include "scene/scene_loader.h"
@@ -68,6 +69,8 @@ struct RenderArgs {
   double checkpoint_every = 300;
   bool resume = false;
   bool quiet = false;
+  std::optional<double> target_error, time_limit;  // film/stopping_rule.h
+  std::optional<std::string> target_region;        // "x0,y0,x1,y1"
 };
 
 int render(const RenderArgs& a);
@@ -105,6 +108,13 @@ Command add_render_command(CLI::App& app) {
                 "crop or settings differ")
       ->needs(ckpt);
   sub->add_flag("-q,--quiet", r.quiet, "No progress bar");
+  auto* target = sub->add_option("--target-error", r.target_error,
+                                 "Stop once the relative standard error of the image (or --target-region) is at most this, "
+                                 "looking at 16, 32, 64, ... spp (docs/convergence.md); --spp is then the maximum (default 65536)")
+                     ->check(CLI::Range(1e-9, 1e9));
+  sub->add_option("--target-region", r.target_region, "Pixels x0,y0,x1,y1 whose error --target-error measures")->needs(target);
+  sub->add_option("--time-limit", r.time_limit, "Stop after the first pass that ends past this many seconds; writes what it has")
+      ->check(CLI::Range(0.0, 1e9));
   return {sub, [args] { return render(*args); }};
 }
 
@@ -170,6 +180,7 @@ int render(const RenderArgs& a) {
   const bool root = dist.rank == 0;
   SceneOverrides o;
   o.spp = a.spp;
+  if (a.target_error && !a.spp && !a.sample_range) o.spp = kTargetErrorMaxSpp;
   o.seed = a.seed;
   o.wavelengths = a.wavelengths;
   o.fluorescence = a.fluorescence;
@@ -188,6 +199,8 @@ int render(const RenderArgs& a) {
   };
   const SampleRange mine = slice(dist.rank);
   const bool full_frame = crop == PixelWindow{0, 0, s.width, s.height};
+  const StoppingRule stopping = make_stopping_rule(a.target_error, a.target_region, a.time_limit, crop, dist.size);
+  StopDecision stopped;
 
   std::filesystem::path out = a.output.empty() ? std::filesystem::path(a.scene.stem().string() + ".exr") : a.output;
   if (out.extension() != ".exr") out += ".exr";
@@ -264,6 +277,10 @@ int render(const RenderArgs& a) {
         last_save = now;
       }
     };
+  ro.stop_after_pass = [&](const Film& f, int done) {
+    stopped = check_stop(stopping, f, done, seconds_before + session_seconds());
+    return stopped.reason != StopReason::none;
+  };
   RenderStats stats;
   if (mine.size() > 0) stats = chlorovdb::render(scene, film, ro);
   std::signal(SIGINT, SIG_DFL);
@@ -337,6 +354,7 @@ int render(const RenderArgs& a) {
   image.metadata.set("interrupted", interrupted ? 1 : 0);
   image.metadata.set("nonfinite_samples", double(nonfinite));  // including sessions before a resume
   if (resumed_at > 0) image.metadata.set("resumed_at_spp", resumed_at);
+  set_stop_metadata(image.metadata, stopping, stopped, film, total_done);
   if (dist.size > 1) image.metadata.set("mpi_ranks", dist.size);
   set_part_metadata(image.metadata, part);
   write_exr(out, image);
@@ -348,6 +366,7 @@ int render(const RenderArgs& a) {
              range == SampleRange{0, total_done} ? "" : fmt::format(" (samples {})", to_string(part.ranges)),
              full_frame ? "" : fmt::format(" of crop {}", to_string(crop)), seconds, mpaths, out.string(), png.string(),
              ckpt.empty() ? "" : fmt::format(" (checkpoint {})", dist.size > 1 ? a.checkpoint.string() + ".rank*" : ckpt.string()));
+  if (stopped.reason != StopReason::none) fmt::print(stderr, "stopped early: {}\n", describe(stopped));
   if (nonfinite > 0) fmt::print(stderr, "warning: {} non-finite samples were dropped\n", nonfinite);
   return interrupted ? 130 : 0;
 }

@@ -135,11 +135,22 @@ void Film::add_layer_sample(size_t pixel, int layer, const SampledSpectrum& L, c
   }
 }
 
+RGB Film::pixel_mean(int layer, size_t pixel, double n) const {
+  const double* s = &xyz_[size_t(layer)][pixel * 3];
+  const double inv_n = 1.0 / n;
+  return rgb_conversion(color_space_)({s[0] * inv_n, s[1] * inv_n, s[2] * inv_n});
+}
+
+RGB Film::pixel_standard_error(int layer, size_t pixel, double n) const {
+  const RGB mean = pixel_mean(layer, pixel, n);  // in double: standard_error's difference cancels
+  const double* s2 = &rgb2_[size_t(layer)][pixel * 3];
+  return {standard_error(mean.r, s2[0], n), standard_error(mean.g, s2[1], n), standard_error(mean.b, s2[2], n)};
+}
+
 Image Film::to_image(double samples_per_pixel) const {
   if (!(samples_per_pixel > 0)) throw std::invalid_argument(fmt::format("Film::to_image: samples_per_pixel = {}", samples_per_pixel));
   const size_t pixel_count = size_t(width_) * size_t(height_);
   const double inv_spp = 1.0 / samples_per_pixel;
-  RGB (*const to_rgb)(const XYZ&) = rgb_conversion(color_space_);
 
   Image image;
   image.width = width_;
@@ -148,8 +159,7 @@ Image Film::to_image(double samples_per_pixel) const {
   for (size_t l = 0; l < xyz_.size(); ++l) {
     ImageLayer layer{layer_names_[l], {"R", "G", "B"}, std::vector<float>(pixel_count * 3)};
     for (size_t p = 0; p < pixel_count; ++p) {
-      const double* s = &xyz_[l][p * 3];
-      const RGB rgb = to_rgb({s[0] * inv_spp, s[1] * inv_spp, s[2] * inv_spp});
+      const RGB rgb = pixel_mean(int(l), p, samples_per_pixel);
       layer.pixels[p * 3 + 0] = float(rgb.r);
       layer.pixels[p * 3 + 1] = float(rgb.g);
       layer.pixels[p * 3 + 2] = float(rgb.b);
@@ -169,12 +179,10 @@ Image Film::to_image(double samples_per_pixel) const {
   for (size_t l = 0; l < xyz_.size(); ++l) {
     ImageLayer layer{stderr_layer_name(layer_names_[l]), {"R", "G", "B"}, std::vector<float>(pixel_count * 3)};
     for (size_t p = 0; p < pixel_count; ++p) {
-      const double* s = &xyz_[l][p * 3];
-      const RGB mean = to_rgb({s[0] * inv_spp, s[1] * inv_spp, s[2] * inv_spp});  // in double: the difference below cancels
-      const double* s2 = &rgb2_[l][p * 3];
-      layer.pixels[p * 3 + 0] = float(standard_error(mean.r, s2[0], samples_per_pixel));
-      layer.pixels[p * 3 + 1] = float(standard_error(mean.g, s2[1], samples_per_pixel));
-      layer.pixels[p * 3 + 2] = float(standard_error(mean.b, s2[2], samples_per_pixel));
+      const RGB se = pixel_standard_error(int(l), p, samples_per_pixel);
+      layer.pixels[p * 3 + 0] = float(se.r);
+      layer.pixels[p * 3 + 1] = float(se.g);
+      layer.pixels[p * 3 + 2] = float(se.b);
     }
     image.layers.push_back(std::move(layer));
   }

@@ -79,6 +79,11 @@ class Film {
   // the mean, same units). Metadata: color_space, samples_per_pixel, nonfinite_samples.
   Image to_image(double samples_per_pixel) const;
 
+  // The mean and its standard error of film pixel `pixel` (y·width + x) of a layer
+  // over n samples, RGB in the film's colour space (what to_image writes, in double).
+  RGB pixel_mean(int layer, size_t pixel, double n) const;
+  RGB pixel_standard_error(int layer, size_t pixel, double n) const;
+
   // Raw sums, for merging renders of the same view: (y·width + x)·3 + {X, Y, Z},
   // and (y·width + x)·bins + bin for the spectral sums.
   const std::vector<double>& raw_xyz(int layer) const { return xyz_[size_t(layer)]; }
