@@ -24,7 +24,7 @@
 #include "checkpoint/partition.h"
 #include "cli/commands.h"
 #include "core/error.h"
-#include "film/stopping_rule.h"
+#include "cli/stopping_options.h"
 #include "integrator/render.h"
 #include "io/image.h"
 #include "scene/scene_loader.h"

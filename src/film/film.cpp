@@ -27,6 +27,12 @@ RGB (*rgb_conversion(ColorSpace c))(const XYZ&) { return c == ColorSpace::sRGB ?
 
 constexpr std::string_view kStderrSuffix = "_stderr";
 
+void put_rgb(ImageLayer& layer, size_t pixel, const RGB& rgb) {
+  layer.pixels[pixel * 3 + 0] = float(rgb.r);
+  layer.pixels[pixel * 3 + 1] = float(rgb.g);
+  layer.pixels[pixel * 3 + 2] = float(rgb.b);
+}
+
 }  // namespace
 
 std::string stderr_layer_name(std::string_view layer) { return std::string(layer) + std::string(kStderrSuffix); }
@@ -158,12 +164,7 @@ Image Film::to_image(double samples_per_pixel) const {
   image.chromaticities = color_space_ == ColorSpace::sRGB ? kSrgbChromaticities : kAcesCgChromaticities;
   for (size_t l = 0; l < xyz_.size(); ++l) {
     ImageLayer layer{layer_names_[l], {"R", "G", "B"}, std::vector<float>(pixel_count * 3)};
-    for (size_t p = 0; p < pixel_count; ++p) {
-      const RGB rgb = pixel_mean(int(l), p, samples_per_pixel);
-      layer.pixels[p * 3 + 0] = float(rgb.r);
-      layer.pixels[p * 3 + 1] = float(rgb.g);
-      layer.pixels[p * 3 + 2] = float(rgb.b);
-    }
+    for (size_t p = 0; p < pixel_count; ++p) put_rgb(layer, p, pixel_mean(int(l), p, samples_per_pixel));
     image.layers.push_back(std::move(layer));
   }
   if (spectral_bins_ > 0) {
@@ -178,12 +179,7 @@ Image Film::to_image(double samples_per_pixel) const {
   }
   for (size_t l = 0; l < xyz_.size(); ++l) {
     ImageLayer layer{stderr_layer_name(layer_names_[l]), {"R", "G", "B"}, std::vector<float>(pixel_count * 3)};
-    for (size_t p = 0; p < pixel_count; ++p) {
-      const RGB se = pixel_standard_error(int(l), p, samples_per_pixel);
-      layer.pixels[p * 3 + 0] = float(se.r);
-      layer.pixels[p * 3 + 1] = float(se.g);
-      layer.pixels[p * 3 + 2] = float(se.b);
-    }
+    for (size_t p = 0; p < pixel_count; ++p) put_rgb(layer, p, pixel_standard_error(int(l), p, samples_per_pixel));
     image.layers.push_back(std::move(layer));
   }
   image.metadata.set("color_space", color_space_ == ColorSpace::sRGB ? std::string("linear sRGB (D65)")
