@@ -2,15 +2,18 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <stdexcept>
 
 #include <fmt/format.h>
+
+#include "film/film.h"
 
 namespace chlorovdb {
 
 namespace {
 
-LayerError layer_error(const ImageLayer& x, const ImageLayer& r) {
+LayerError layer_error(const ImageLayer& x, const ImageLayer& r, const ImageLayer* r_stderr) {
   LayerError e;
   e.layer = r.name;
   const size_t n = r.pixels.size();
@@ -31,6 +34,28 @@ LayerError layer_error(const ImageLayer& x, const ImageLayer& r) {
     e.bias = diff / double(n);
   }
   e.rmse = std::sqrt(e.mse);
+  if (r_stderr && r_stderr->pixels.size() == n && n) {
+    double var = 0, rel_var = 0;
+    for (size_t i = 0; i < n; ++i) {
+      const double s2 = double(r_stderr->pixels[i]) * r_stderr->pixels[i];
+      var += s2;
+      rel_var += s2 / (double(r.pixels[i]) * r.pixels[i] + eps);
+    }
+    e.reference_variance = var / double(n);
+    e.reference_rel_variance = rel_var / double(n);
+  }
+  if (const size_t nc = r.channels.size(); n && nc && se > 0) {
+    std::vector<double> per_pixel(n / nc, 0.0);
+    for (size_t i = 0; i < n; ++i) {
+      const double d = double(x.pixels[i]) - double(r.pixels[i]);
+      per_pixel[i / nc] += d * d;
+    }
+    const size_t top = std::max<size_t>(1, size_t(std::ceil(kTopPixelFraction * double(per_pixel.size()))));
+    std::nth_element(per_pixel.begin(), per_pixel.begin() + (top - 1), per_pixel.end(), std::greater<double>());
+    double worst = 0;
+    for (size_t i = 0; i < top; ++i) worst += per_pixel[i];
+    e.top_pixel_share = worst / se;
+  }
   if (n) {
     std::vector<float> magnitude(n);
     for (size_t i = 0; i < n; ++i) magnitude[i] = std::abs(r.pixels[i]);
@@ -57,11 +82,47 @@ std::vector<LayerError> image_errors(const Image& estimate, const Image& referen
   std::vector<LayerError> errors;
   for (const ImageLayer& r : reference.layers) {
     const ImageLayer* x = estimate.find_layer(r.name);
-    if (!x || x->channels != r.channels || x->pixels.size() != r.pixels.size()) continue;
-    errors.push_back(layer_error(*x, r));
+    if (is_stderr_layer(r.name) || !x || x->channels != r.channels || x->pixels.size() != r.pixels.size()) continue;
+    const ImageLayer* r_stderr = reference.find_layer(stderr_layer_name(r.name));
+    if (r_stderr && r_stderr->channels != r.channels) r_stderr = nullptr;
+    errors.push_back(layer_error(*x, r, r_stderr));
   }
   if (errors.empty()) throw std::invalid_argument("the image and the reference share no layer");
   return errors;
+}
+
+std::vector<std::string> error_warnings(const LayerError& e) {
+  std::vector<std::string> w;
+  if (e.mse > 0 && e.reference_variance > kReferenceDominatesShare * e.mse)
+    w.push_back(fmt::format("layer {}: the reference's own error is {:.0f} % of the MSE ({:.3e} of {:.3e}): render the reference "
+                            "longer, or compare with mse - reference_variance",
+                            e.layer, 100 * e.reference_variance / e.mse, e.reference_variance, e.mse));
+  if (e.top_pixel_share > kTopPixelShareWarning)
+    w.push_back(fmt::format("layer {}: the worst {:g} % of pixels hold {:.0f} % of the squared error (fireflies in the estimate or "
+                            "the reference?): MSE is dominated by them; compare relMSE and bias_clamped",
+                            e.layer, 100 * kTopPixelFraction, 100 * e.top_pixel_share));
+  return w;
+}
+
+ReferenceSelfError reference_self_error(const Image& reference, const std::string& layer) {
+  ReferenceSelfError out;
+  const ImageLayer* r = reference.find_layer(layer);
+  const ImageLayer* se = reference.find_layer(stderr_layer_name(layer));
+  if (!r || !se || se->pixels.size() != r->pixels.size() || r->pixels.empty()) return out;
+  out.available = true;
+  const size_t n = r->pixels.size();
+  double sum_r = 0, var = 0, rel = 0;
+  for (float v : r->pixels) sum_r += v;
+  out.mean = sum_r / double(n);
+  const double eps = std::max(kRelativeEpsilon * out.mean * out.mean, 1e-30);
+  for (size_t i = 0; i < n; ++i) {
+    const double s2 = double(se->pixels[i]) * se->pixels[i];
+    var += s2;
+    rel += s2 / (double(r->pixels[i]) * r->pixels[i] + eps);
+  }
+  out.rms_stderr = std::sqrt(var / double(n));
+  out.rel_mse = rel / double(n);
+  return out;
 }
 
 const LayerError* find_error(const std::vector<LayerError>& errors, const std::string& layer) {

@@ -10,6 +10,16 @@
 //   bias_clamped = the same with x and r clamped to +-q, q the 99.9th percentile of |r| over the
 //              layer: a reference that is not converged in a few pixels (fireflies: rare, very
 //              bright samples) moves `bias` and MSE by its outliers alone; this does not.
+//   reference_variance = mean of se_r^2 over pixels and channels, se_r the reference's own
+//              standard-error layer ("<layer>_stderr", film/film.h), 0 when it has none: the
+//              measured MSE is the estimate's MSE plus this (independent seeds), so
+//              mse - reference_variance estimates the estimate's own MSE;
+//   reference_rel_variance = the same term of relMSE: mean of se_r^2 / (r^2 + eps);
+//   top_pixel_share = the fraction of the squared error (summed over channels) held by
+//              the worst kTopPixelFraction of pixels (at least one): ~0.01-0.02 for
+//              Gaussian noise; large when a few pixels (fireflies in the estimate or the
+//              reference) dominate the MSE.
+// Standard-error layers themselves are not compared.
 #include <string>
 #include <vector>
 
@@ -19,13 +29,35 @@ namespace chlorovdb {
 
 // Regularises relMSE where the reference is dark (relative to the layer's mean squared).
 inline constexpr double kRelativeEpsilon = 1e-2;
+inline constexpr double kTopPixelFraction = 1e-3;
+
+// Thresholds of the warnings `converge` and `reference` print (error_warnings).
+inline constexpr double kReferenceDominatesShare = 0.1;  // reference_variance > this share of the MSE
+inline constexpr double kTopPixelShareWarning = 0.2;     // top 0.1 % of pixels hold more than this
 
 struct LayerError {
   std::string layer;
   double mse = 0, rmse = 0, rel_mse = 0, bias = 0;
   double reference_mean = 0;  // mean of r over pixels and channels (scale of the layer)
   double bias_clamped = 0, reference_mean_clamped = 0;
+  double reference_variance = 0, reference_rel_variance = 0;
+  double top_pixel_share = 0;
 };
+
+// Human-readable warnings for one layer's error: the reference's own error is more
+// than kReferenceDominatesShare of the MSE, or the worst 0.1 % of pixels hold more
+// than kTopPixelShareWarning of it. Empty when neither holds.
+std::vector<std::string> error_warnings(const LayerError& e);
+
+// The reference's own error of a layer, from its standard-error layer: the RMS of se
+// over pixels and channels, the term it adds to relMSE (as reference_rel_variance),
+// and the layer's mean.
+struct ReferenceSelfError {
+  bool available = false;  // the image has "<layer>_stderr"
+  double rms_stderr = 0, rel_mse = 0;
+  double mean = 0;
+};
+ReferenceSelfError reference_self_error(const Image& reference, const std::string& layer);
 
 // One entry per layer present in both images with the same channels (in the
 // reference's order); other layers are skipped. Throws std::invalid_argument

@@ -20,12 +20,13 @@ namespace chlorovdb {
 namespace {
 
 constexpr char kMagic[8] = {'C', 'H', 'L', 'V', 'D', 'B', 'C', 'K'};
-constexpr uint32_t kFormatVersion = 1;
+constexpr uint32_t kFormatVersion = 2;  // 2: sums of squares (standard error) after the sums
 static_assert(std::endian::native == std::endian::little, "checkpoints are little-endian");
 
 // Film sums are only reachable through const accessors (film/film.h); the Film
 // object itself is not const, so writing through them is well defined.
 std::vector<double>& mutable_xyz(Film& film, int layer) { return const_cast<std::vector<double>&>(film.raw_xyz(layer)); }
+std::vector<double>& mutable_rgb2(Film& film, int layer) { return const_cast<std::vector<double>&>(film.raw_rgb_squares(layer)); }
 std::vector<double>& mutable_spectral(Film& film) { return const_cast<std::vector<double>&>(film.raw_spectral()); }
 
 // Word-wise 64-bit hash (FNV-style multiply-xor with a final mix): catches torn or corrupted files.
@@ -72,7 +73,7 @@ nlohmann::json header_json(const CheckpointHeader& h, const Film& film) {
 }
 
 size_t payload_doubles(int w, int h, size_t layers, int bins) {
-  return size_t(w) * size_t(h) * (3 * layers + size_t(bins));
+  return size_t(w) * size_t(h) * (6 * layers + size_t(bins));
 }
 
 struct Parsed {
@@ -181,6 +182,8 @@ void write_checkpoint(const std::filesystem::path& file, const CheckpointHeader&
   put(&length, 8);
   put(text.data(), text.size());
   for (size_t l = 0; l < film.layer_names().size(); ++l) put(film.raw_xyz(int(l)).data(), film.raw_xyz(int(l)).size() * 8);
+  for (size_t l = 0; l < film.layer_names().size(); ++l)
+    put(film.raw_rgb_squares(int(l)).data(), film.raw_rgb_squares(int(l)).size() * 8);
   put(film.raw_spectral().data(), film.raw_spectral().size() * 8);
   const uint64_t checksum = sum.h;
   if (std::fwrite(&checksum, 8, 1, f.get()) != 1 || std::fflush(f.get()) != 0 || ::fsync(::fileno(f.get())) != 0)
@@ -228,6 +231,7 @@ Film read_checkpoint(const std::filesystem::path& file, CheckpointHeader* header
     p.checksum.add(v.data(), v.size() * 8);
   };
   for (size_t l = 0; l < p.layers.size(); ++l) get(mutable_xyz(film, int(l)));
+  for (size_t l = 0; l < p.layers.size(); ++l) get(mutable_rgb2(film, int(l)));
   get(mutable_spectral(film));
   uint64_t stored = 0;
   if (std::fread(&stored, 8, 1, f.get()) != 1 || stored != p.checksum.h)
@@ -253,13 +257,22 @@ void add_film_window(Film& full, const Film& part, const PixelWindow& window) {
       for (size_t i = 0; i < size_t(window.width()) * per_pixel; ++i) dst[d + i] += src[s + i];
     }
   };
-  for (size_t l = 0; l < full.layer_names().size(); ++l) add_rows(mutable_xyz(full, int(l)), part.raw_xyz(int(l)), 3);
+  for (size_t l = 0; l < full.layer_names().size(); ++l) {
+    add_rows(mutable_xyz(full, int(l)), part.raw_xyz(int(l)), 3);
+    add_rows(mutable_rgb2(full, int(l)), part.raw_rgb_squares(int(l)), 3);
+  }
   if (full.spectral_bins() > 0) add_rows(mutable_spectral(full), part.raw_spectral(), size_t(full.spectral_bins()));
 }
 
 void set_raw_sums(Film& film, int layer, const std::vector<double>& sums) {
   std::vector<double>& dst = mutable_xyz(film, layer);
   if (sums.size() != dst.size()) throw std::invalid_argument("set_raw_sums: size mismatch");
+  dst = sums;
+}
+
+void set_raw_rgb_squares(Film& film, int layer, const std::vector<double>& sums) {
+  std::vector<double>& dst = mutable_rgb2(film, layer);
+  if (sums.size() != dst.size()) throw std::invalid_argument("set_raw_rgb_squares: size mismatch");
   dst = sums;
 }
 

@@ -4,9 +4,10 @@
 // renders can be merged without float rounding.
 //
 // File layout (little-endian), docs/distributed.md:
-//   "CHLVDBCK"  u32 format version (1)  u64 header length H
+//   "CHLVDBCK"  u32 format version (2)  u64 header length H
 //   H bytes of JSON header (CheckpointHeader, plus layers, spectral bins, colour space)
-//   f64 sums: each layer's (y·w + x)·3 + {X,Y,Z}, then (y·w + x)·bins + bin; w, h = the crop's size
+//   f64 sums: each layer's (y·w + x)·3 + {X,Y,Z}, then each layer's sums of squared RGB
+//   (y·w + x)·3 + {R,G,B} (the standard-error layers), then (y·w + x)·bins + bin; w, h = the crop's size
 //   u64 checksum of everything before it
 // Written to "<file>.<pid>.tmp", flushed to disk and renamed over <file>: a crash
 // (even SIGKILL) leaves either the previous checkpoint or the new one, never a torn file.
@@ -49,6 +50,7 @@ Film read_checkpoint(const std::filesystem::path& file, CheckpointHeader* header
 void add_film_window(Film& full, const Film& part, const PixelWindow& window);
 // Overwrites `film`'s sums with `sums` (same layout as raw_xyz / raw_spectral).
 void set_raw_sums(Film& film, int layer, const std::vector<double>& sums);
+void set_raw_rgb_squares(Film& film, int layer, const std::vector<double>& sums);
 void set_raw_spectral(Film& film, const std::vector<double>& sums);
 
 }  // namespace chlorovdb

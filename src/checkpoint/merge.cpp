@@ -162,11 +162,17 @@ Image merge_exrs(const std::vector<std::filesystem::path>& files, MergeSummary* 
                          fmt::format("differs from layer {} ('{}') of {} (names or channels)", l, out.layers[l].name,
                                      parts.front().file.string()));
       const size_t nc = src.channels.size();
+      // A standard-error layer accumulates its samples' sum of squares (film/film.h), which needs the mean.
+      const ImageLayer* mean = is_stderr_layer(src.name) ? img.find_layer(stderr_base_name(src.name)) : nullptr;
+      if (mean && mean->pixels.size() != src.pixels.size()) mean = nullptr;
+      if (is_stderr_layer(src.name) && !mean)
+        throw InputError(p.file.string(), "layer", src.name, "a standard-error layer without its mean layer");
       for (int y = 0; y < c.height(); ++y)
         for (int x = 0; x < c.width(); ++x) {
-          const float* s = &src.pixels[(size_t(y) * c.width() + x) * nc];
+          const size_t at = (size_t(y) * c.width() + x) * nc;
+          const float* s = &src.pixels[at];
           double* d = &acc[l][(size_t(c.y0 + y) * W + size_t(c.x0 + x)) * nc];
-          for (size_t k = 0; k < nc; ++k) d[k] += weight * double(s[k]);
+          for (size_t k = 0; k < nc; ++k) d[k] += mean ? sum_of_squares(mean->pixels[at + k], s[k], weight) : weight * double(s[k]);
         }
     }
     nonfinite += metadata_number(img.metadata, "nonfinite_samples");
@@ -178,7 +184,16 @@ Image merge_exrs(const std::vector<std::filesystem::path>& files, MergeSummary* 
   total = merged.samples();
   for (size_t l = 0; l < out.layers.size(); ++l) {
     out.layers[l].pixels.resize(acc[l].size());
+    if (is_stderr_layer(out.layers[l].name)) continue;
     for (size_t i = 0; i < acc[l].size(); ++i) out.layers[l].pixels[i] = float(acc[l][i] / double(total));
+  }
+  for (size_t l = 0; l < out.layers.size(); ++l) {
+    if (!is_stderr_layer(out.layers[l].name)) continue;
+    const auto mean = std::find_if(out.layers.begin(), out.layers.end(),
+                                   [&](const ImageLayer& m) { return m.name == stderr_base_name(out.layers[l].name); });
+    const std::vector<double>& mean_sum = acc[size_t(mean - out.layers.begin())];
+    for (size_t i = 0; i < acc[l].size(); ++i)
+      out.layers[l].pixels[i] = float(standard_error(mean_sum[i] / double(total), acc[l][i], double(total)));
   }
   set_merged_metadata(out.metadata, merged, int(parts.size()), nonfinite, wall);
   if (summary) *summary = {int(parts.size()), int(total), ranges, false};

@@ -35,5 +35,6 @@ Command add_converge_command(CLI::App& app);
 Command add_reference_command(CLI::App& app);
 Command add_export_pbrt_command(CLI::App& app);
 Command add_merge_command(CLI::App& app);
+Command add_measure_command(CLI::App& app);
 
 }  // namespace chlorovdb::cli

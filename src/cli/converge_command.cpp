@@ -12,6 +12,7 @@
 #include "analysis/svg_plot.h"
 #include "cli/commands.h"
 #include "core/error.h"
+#include "film/film.h"
 #include "io/image.h"
 #include "session/interrupt.h"
 
@@ -57,6 +58,26 @@ std::vector<T> parse_list(const std::string& text, const char* option) {
 }
 
 int converge(const ConvergeArgs& a);
+
+// The reference's own error (its standard-error layers) and whether it shares the variant's seed.
+void report_reference(const Image& reference, const std::filesystem::path& file, uint64_t seed) {
+  for (const ImageLayer& l : reference.layers) {
+    if (is_stderr_layer(l.name) || l.channels.size() != 3) continue;
+    const ReferenceSelfError e = reference_self_error(reference, l.name);
+    if (!e.available) {
+      fmt::print(stderr, "reference {}: layer {} has no standard-error layer: its own error is unknown\n", file.string(), l.name);
+      continue;
+    }
+    fmt::print(stderr, "reference {}: layer {}: RMS standard error {:.3e} ({:.3g} % of its mean), adds {:.3e} to relMSE\n",
+               file.string(), l.name, e.rms_stderr, e.mean != 0 ? 100 * e.rms_stderr / std::abs(e.mean) : 0.0, e.rel_mse);
+  }
+  if (const MetadataValue* v = reference.metadata.find("seed"))
+    if (const auto* text = std::get_if<std::string>(v); text && *text == std::to_string(seed))
+      fmt::print(stderr,
+                 "warning: the reference was rendered with this run's seed {}: the estimate shares its first samples with the "
+                 "reference and its error is underestimated; render the reference with another --seed (e.g. 1000003)\n",
+                 seed);
+}
 
 }  // namespace
 
@@ -117,6 +138,7 @@ int converge(const ConvergeArgs& a) {
     throw InputError(a.reference.string(), "", fmt::format("{}x{}", reference.width, reference.height),
                      fmt::format("the reference's size differs from the render's {}x{} (use --resolution)",
                                  scene.settings.width, scene.settings.height));
+  if (!slab) report_reference(reference, a.reference, scene.settings.seed);
 
   ConvergenceOptions co;
   co.spp = parse_list<int>(a.spp, "--spp");
@@ -136,19 +158,25 @@ int converge(const ConvergeArgs& a) {
     return run_convergence(scene, reference, co);
   }();
 
+  // Warnings at the largest effort, where the reference's share of the error is largest.
+  if (!points.empty())
+    for (const LayerError& e : points.back().errors)
+      for (const std::string& w : error_warnings(e)) fmt::print(stderr, "warning: {}\n", w);
+
   // CSV: one row per point and layer.
   const std::filesystem::path csv = prefix.string() + ".csv";
   {
     std::ofstream f(csv);
     f << "label,spp,wall_seconds,cpu_seconds,clock,time_budget,layer,mse,rmse,rel_mse,bias,reference_mean,"
-         "bias_clamped,reference_mean_clamped,efficiency,efficiency_rel\n";
+         "bias_clamped,reference_mean_clamped,efficiency,efficiency_rel,reference_variance,reference_rel_variance,top_pixel_share\n";
     for (const ConvergencePoint& p : points)
       for (const LayerError& e : p.errors) {
         const double t = p.time(co.clock);
-        f << fmt::format("{},{},{:.6f},{:.6f},{},{:g},{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e}\n", label,
+        f << fmt::format("{},{},{:.6f},{:.6f},{},{:g},{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e}\n", label,
                          p.spp, p.seconds, p.cpu_seconds, a.clock, p.time_budget, e.layer, e.mse, e.rmse, e.rel_mse, e.bias,
                          e.reference_mean, e.bias_clamped, e.reference_mean_clamped,
-                         e.mse > 0 && t > 0 ? 1.0 / (e.mse * t) : 0.0, e.rel_mse > 0 && t > 0 ? 1.0 / (e.rel_mse * t) : 0.0);
+                         e.mse > 0 && t > 0 ? 1.0 / (e.mse * t) : 0.0, e.rel_mse > 0 && t > 0 ? 1.0 / (e.rel_mse * t) : 0.0,
+                         e.reference_variance, e.reference_rel_variance, e.top_pixel_share);
       }
     if (!f) throw InputError(csv.string(), "", "", "cannot be written");
   }

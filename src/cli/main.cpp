@@ -20,6 +20,7 @@ int main(int argc, char** argv) {
       cli::add_reference_command(app),
       cli::add_export_pbrt_command(app),
       cli::add_merge_command(app),
+      cli::add_measure_command(app),
   };
   CLI11_PARSE(app, argc, argv);
   try {

@@ -5,6 +5,7 @@
 // an uninterrupted one bit for bit.
 #include <fmt/format.h>
 
+#include "analysis/image_error.h"
 #include "analysis/scene_variant.h"
 #include "cli/commands.h"
 #include "core/error.h"
@@ -67,6 +68,11 @@ int reference(const ReferenceArgs& a) {
   std::filesystem::path out = a.output;
   if (out.extension() != ".exr") out += ".exr";
   if (out.has_parent_path()) std::filesystem::create_directories(out.parent_path());
+  if (!a.seed)
+    fmt::print(stderr,
+               "warning: no --seed: this reference uses the scene's seed {}, as renders of the scene do; a variant compared "
+               "with it then shares its first samples and its error is underestimated (use e.g. --seed 1000003)\n",
+               scene.settings.seed);
 
   RenderJob job;
   job.samples = SampleRange{0, a.spp};
@@ -101,9 +107,15 @@ int reference(const ReferenceArgs& a) {
     InterruptScope interrupts;
     return run_render_session(scene, job);
   }();
-  if (r.samples_done > 0) write(session_image(scene, job, r), r.samples_done);
+  const Image image = r.samples_done > 0 ? session_image(scene, job, r) : Image{};
+  if (r.samples_done > 0) write(image, r.samples_done);
   fmt::print(stderr, "{}: {} of {} spp in {}, {:.1f} s this session\n", r.interrupted ? "interrupted" : "done",
              r.samples_done, a.spp, out.string(), r.session_seconds);
+  if (r.samples_done == 0) return r.interrupted ? 130 : 0;
+  for (const std::string layer : {"total", "fluorescence", "nonfluorescence"})
+    if (const ReferenceSelfError e = reference_self_error(image, layer); e.available && e.mean != 0)
+      fmt::print(stderr, "own error, layer {}: RMS standard error {:.3e} ({:.3g} % of its mean), adds {:.3e} to relMSE\n", layer,
+                 e.rms_stderr, 100 * e.rms_stderr / std::abs(e.mean), e.rel_mse);
   return r.interrupted ? 130 : 0;
 }
 

@@ -10,6 +10,7 @@
 //
 // Built a second time as `chlorovdb-mpi` (CHLOROVDB_MPI=ON, -DCHLOROVDB_MPI_MAIN):
 // the ranks split the sample range and reduce the film sums to rank 0.
+#include <chrono>
 #include <cstdio>
 
 #include <fmt/format.h>
@@ -21,6 +22,7 @@
 #include "checkpoint/partition.h"
 #include "analysis/scene_variant.h"
 #include "cli/commands.h"
+#include "cli/stopping_options.h"
 #include "core/error.h"
 #include "io/image.h"
 #include "scene/scene_loader.h"
@@ -48,6 +50,8 @@ struct RenderArgs {
   double checkpoint_every = 300;
   bool resume = false;
   bool quiet = false;
+  std::optional<double> target_error, time_limit;  // film/stopping_rule.h
+  std::optional<std::string> target_region;        // "x0,y0,x1,y1"
 };
 
 int render(const RenderArgs& a);
@@ -86,6 +90,13 @@ Command add_render_command(CLI::App& app) {
       ->needs(ckpt);
   sub->add_option("--set", r.sets, "KEY=VALUE: change any scene key, e.g. media.solution.pigments[0].concentration=5 (repeatable)");
   sub->add_flag("-q,--quiet", r.quiet, "No progress bar");
+  auto* target = sub->add_option("--target-error", r.target_error,
+                                 "Stop once the relative standard error of the image (or --target-region) is at most this, "
+                                 "looking at 16, 32, 64, ... spp (docs/convergence.md); --spp is then the maximum (default 65536)")
+                     ->check(Real(1e-9, 1e9));
+  sub->add_option("--target-region", r.target_region, "Pixels x0,y0,x1,y1 whose error --target-error measures")->needs(target);
+  sub->add_option("--time-limit", r.time_limit, "Stop after the first pass that ends past this many seconds; writes what it has")
+      ->check(Real(0, 1e9));
   return {sub, [args] { return render(*args); }};
 }
 
@@ -108,6 +119,7 @@ void reduce_sum(std::vector<double>& v) {
 int render(const RenderArgs& a) {
   SceneOverrides o;
   o.spp = a.spp;
+  if (a.target_error && !a.spp && !a.sample_range) o.spp = kTargetErrorMaxSpp;
   o.seed = a.seed;
   o.wavelengths = a.wavelengths;
   o.fluorescence = a.fluorescence;
@@ -127,6 +139,15 @@ int render(const RenderArgs& a) {
   job.interrupt = &interrupt_requested();
   job.ranks = g_ranks;
   const bool root = job.ranks.rank == 0;
+  const PixelWindow crop = job.crop.value_or(PixelWindow{0, 0, s.width, s.height});
+  const StoppingRule stopping = make_stopping_rule(a.target_error, a.target_region, a.time_limit, crop, job.ranks.size);
+  StopDecision stopped;
+  const auto run_start = std::chrono::steady_clock::now();
+  job.stop_after_pass = [&](const Film& f, int done) {
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - run_start).count();
+    stopped = check_stop(stopping, f, done, seconds);
+    return stopped.reason != StopReason::none;
+  };
 
   std::filesystem::path out = a.output.empty() ? std::filesystem::path(a.scene.stem().string() + ".exr") : a.output;
   if (out.extension() != ".exr") out += ".exr";
@@ -145,7 +166,8 @@ int render(const RenderArgs& a) {
     fmt::print(stderr, "interrupted before the first pass completed: nothing written\n");
     return 130;
   }
-  const Image image = session_image(scene, job, r);
+  Image image = session_image(scene, job, r);
+  set_stop_metadata(image.metadata, stopping, stopped, r.film, r.samples_done);
   write_exr(out, image);
   write_png(png, image.layers[0], r.crop.width(), r.crop.height(), a.exposure.value_or(s.exposure));
 
@@ -157,6 +179,7 @@ int render(const RenderArgs& a) {
              full_frame ? "" : fmt::format(" of crop {}", to_string(r.crop)), r.seconds, mpaths, out.string(), png.string(),
              a.checkpoint.empty() ? ""
                                   : fmt::format(" (checkpoint {})", r.ranks > 1 ? a.checkpoint.string() + ".rank*" : r.checkpoint.string()));
+  if (stopped.reason != StopReason::none) fmt::print(stderr, "stopped early: {}\n", describe(stopped));
   if (r.nonfinite_samples > 0) fmt::print(stderr, "warning: {} non-finite samples were dropped\n", r.nonfinite_samples);
   return r.interrupted ? 130 : 0;
 }

@@ -23,7 +23,30 @@ std::string spectral_channel_name(float lambda_nm) {
   return s + "nm";
 }
 
+RGB (*rgb_conversion(ColorSpace c))(const XYZ&) { return c == ColorSpace::sRGB ? xyz_to_linear_srgb : xyz_to_acescg; }
+
+constexpr std::string_view kStderrSuffix = "_stderr";
+
+void put_rgb(ImageLayer& layer, size_t pixel, const RGB& rgb) {
+  layer.pixels[pixel * 3 + 0] = float(rgb.r);
+  layer.pixels[pixel * 3 + 1] = float(rgb.g);
+  layer.pixels[pixel * 3 + 2] = float(rgb.b);
+}
+
 }  // namespace
+
+std::string stderr_layer_name(std::string_view layer) { return std::string(layer) + std::string(kStderrSuffix); }
+
+bool is_stderr_layer(std::string_view name) {
+  return name.size() > kStderrSuffix.size() && name.substr(name.size() - kStderrSuffix.size()) == kStderrSuffix;
+}
+
+std::string_view stderr_base_name(std::string_view name) { return name.substr(0, name.size() - kStderrSuffix.size()); }
+
+double standard_error(double mean, double sum2, double n) {
+  if (!(n >= 2)) return 0.0;
+  return std::sqrt(std::max(0.0, sum2 - n * mean * mean) / (n * (n - 1)));
+}
 
 Film::Film(int width, int height, std::vector<std::string> layer_names, ColorSpace color_space)
     : width_(width), height_(height), layer_names_(std::move(layer_names)), color_space_(color_space) {
@@ -31,10 +54,11 @@ Film::Film(int width, int height, std::vector<std::string> layer_names, ColorSpa
     throw std::invalid_argument(fmt::format("Film: needs a positive size and at least one layer ({}x{}, {} layers)", width,
                                             height, layer_names_.size()));
   // Render holds a second, per-pass film of the same size: refuse before allocating.
-  check_memory(2.0 * width * height * layer_names_.size() * 3 * sizeof(double), "the film's sums", "film",
+  check_memory(2.0 * width * height * layer_names_.size() * 6 * sizeof(double), "the film's sums", "film",
                "resolution", fmt::format("{}x{}", width, height));
   cie_y_integral();  // load the colour-matching functions now: a missing table fails at setup, not mid-render
   xyz_.assign(layer_names_.size(), std::vector<double>(size_t(width) * size_t(height) * 3, 0.0));
+  rgb2_ = xyz_;
 }
 
 Film::Film(Film&& o) noexcept
@@ -43,6 +67,7 @@ Film::Film(Film&& o) noexcept
       layer_names_(std::move(o.layer_names_)),
       color_space_(o.color_space_),
       xyz_(std::move(o.xyz_)),
+      rgb2_(std::move(o.rgb2_)),
       spectral_min_nm_(o.spectral_min_nm_),
       spectral_max_nm_(o.spectral_max_nm_),
       spectral_bins_(o.spectral_bins_),
@@ -55,6 +80,7 @@ Film& Film::operator=(Film&& o) noexcept {
   layer_names_ = std::move(o.layer_names_);
   color_space_ = o.color_space_;
   xyz_ = std::move(o.xyz_);
+  rgb2_ = std::move(o.rgb2_);
   spectral_min_nm_ = o.spectral_min_nm_;
   spectral_max_nm_ = o.spectral_max_nm_;
   spectral_bins_ = o.spectral_bins_;
@@ -99,6 +125,11 @@ void Film::add_layer_sample(size_t pixel, int layer, const SampledSpectrum& L, c
   sum[0] += xyz.x;
   sum[1] += xyz.y;
   sum[2] += xyz.z;
+  const RGB rgb = rgb_conversion(color_space_)(xyz);
+  double* sum2 = &rgb2_[size_t(layer)][pixel * 3];
+  sum2[0] += rgb.r * rgb.r;
+  sum2[1] += rgb.g * rgb.g;
+  sum2[2] += rgb.b * rgb.b;
 
   if (layer != 0 || spectral_bins_ == 0) return;
   const float bins_per_nm = float(spectral_bins_) / (spectral_max_nm_ - spectral_min_nm_);
@@ -110,11 +141,22 @@ void Film::add_layer_sample(size_t pixel, int layer, const SampledSpectrum& L, c
   }
 }
 
+RGB Film::pixel_mean(int layer, size_t pixel, double n) const {
+  const double* s = &xyz_[size_t(layer)][pixel * 3];
+  const double inv_n = 1.0 / n;
+  return rgb_conversion(color_space_)({s[0] * inv_n, s[1] * inv_n, s[2] * inv_n});
+}
+
+RGB Film::pixel_standard_error(int layer, size_t pixel, double n) const {
+  const RGB mean = pixel_mean(layer, pixel, n);  // in double: standard_error's difference cancels
+  const double* s2 = &rgb2_[size_t(layer)][pixel * 3];
+  return {standard_error(mean.r, s2[0], n), standard_error(mean.g, s2[1], n), standard_error(mean.b, s2[2], n)};
+}
+
 Image Film::to_image(double samples_per_pixel) const {
   if (!(samples_per_pixel > 0)) throw std::invalid_argument(fmt::format("Film::to_image: samples_per_pixel = {}", samples_per_pixel));
   const size_t pixel_count = size_t(width_) * size_t(height_);
   const double inv_spp = 1.0 / samples_per_pixel;
-  RGB (*const to_rgb)(const XYZ&) = color_space_ == ColorSpace::sRGB ? xyz_to_linear_srgb : xyz_to_acescg;
 
   Image image;
   image.width = width_;
@@ -122,13 +164,7 @@ Image Film::to_image(double samples_per_pixel) const {
   image.chromaticities = color_space_ == ColorSpace::sRGB ? kSrgbChromaticities : kAcesCgChromaticities;
   for (size_t l = 0; l < xyz_.size(); ++l) {
     ImageLayer layer{layer_names_[l], {"R", "G", "B"}, std::vector<float>(pixel_count * 3)};
-    for (size_t p = 0; p < pixel_count; ++p) {
-      const double* s = &xyz_[l][p * 3];
-      const RGB rgb = to_rgb({s[0] * inv_spp, s[1] * inv_spp, s[2] * inv_spp});
-      layer.pixels[p * 3 + 0] = float(rgb.r);
-      layer.pixels[p * 3 + 1] = float(rgb.g);
-      layer.pixels[p * 3 + 2] = float(rgb.b);
-    }
+    for (size_t p = 0; p < pixel_count; ++p) put_rgb(layer, p, pixel_mean(int(l), p, samples_per_pixel));
     image.layers.push_back(std::move(layer));
   }
   if (spectral_bins_ > 0) {
@@ -140,6 +176,11 @@ Image Film::to_image(double samples_per_pixel) const {
     for (size_t i = 0; i < spectral_.size(); ++i) layer.pixels[i] = float(spectral_[i] * norm);
     image.layers.push_back(std::move(layer));
     image.metadata.set("spectral_bin_width_nm", width_nm);
+  }
+  for (size_t l = 0; l < xyz_.size(); ++l) {
+    ImageLayer layer{stderr_layer_name(layer_names_[l]), {"R", "G", "B"}, std::vector<float>(pixel_count * 3)};
+    for (size_t p = 0; p < pixel_count; ++p) put_rgb(layer, p, pixel_standard_error(int(l), p, samples_per_pixel));
+    image.layers.push_back(std::move(layer));
   }
   image.metadata.set("color_space", color_space_ == ColorSpace::sRGB ? std::string("linear sRGB (D65)")
                                                                       : std::string("ACEScg (AP1, Bradford-adapted from D65)"));
@@ -155,7 +196,10 @@ void Film::merge(const Film& other) {
                                             height_, layer_names_.size(), spectral_bins_, other.width_, other.height_,
                                             other.layer_names_.size(), other.spectral_bins_));
   for (size_t l = 0; l < xyz_.size(); ++l)
-    for (size_t i = 0; i < xyz_[l].size(); ++i) xyz_[l][i] += other.xyz_[l][i];
+    for (size_t i = 0; i < xyz_[l].size(); ++i) {
+      xyz_[l][i] += other.xyz_[l][i];
+      rgb2_[l][i] += other.rgb2_[l][i];
+    }
   for (size_t i = 0; i < spectral_.size(); ++i) spectral_[i] += other.spectral_[i];
   nonfinite_.fetch_add(other.nonfinite_samples(), std::memory_order_relaxed);
 }

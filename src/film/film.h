@@ -8,10 +8,21 @@
 // adds L_i / (pdf_i · count) to the bin holding λ_i, an unbiased estimate of
 // ∫_bin L dλ; divided by the bin width and spp it is the bin-averaged spectral
 // radiance (W m⁻² sr⁻¹ nm⁻¹, relative), written as an EXR spectral layer.
+//
+// Error as an output: per pixel and layer the film also sums the squares of each
+// camera sample's RGB (in the output colour space). The pixel filter is a box of
+// one pixel, so every camera sample lands in exactly one pixel and the samples of
+// a pixel are i.i.d.: one camera sample carrying N hero wavelengths is ONE sample
+// of the pixel estimator (its lanes are summed before squaring, never squared
+// lane by lane, which would ignore their correlation). The standard error of the
+// mean of n samples is then sqrt((Σx² − n·mean²) / (n (n − 1))), written as a
+// layer "<layer>_stderr" beside each layer. Moments (not batch means) because
+// they add exactly under merge, checkpoint and resume and need no batch size.
 #include <atomic>
 #include <cstdint>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "io/image.h"
@@ -21,6 +32,20 @@
 namespace chlorovdb {
 
 enum class ColorSpace { sRGB, ACEScg };
+
+// Name of the standard-error layer of `layer` ("total" -> "total_stderr").
+std::string stderr_layer_name(std::string_view layer);
+bool is_stderr_layer(std::string_view name);
+
+// Standard error of a mean of n samples from the mean and the sum of squares
+// (0 for n < 2): sqrt(max(0, sum2 - n mean²) / (n (n - 1))).
+double standard_error(double mean, double sum2, double n);
+// Its inverse: the sum of squares of n samples whose mean has standard error se,
+// n (n - 1) se² + n mean², so means stored with their standard errors (EXR parts,
+// a resumed reference) combine exactly like raw moments (up to float rounding).
+inline double sum_of_squares(double mean, double se, double n) { return n * (n - 1) * se * se + n * mean * mean; }
+// The mean layer a standard-error layer belongs to ("total_stderr" -> "total").
+std::string_view stderr_base_name(std::string_view stderr_layer);
 
 class Film {
  public:
@@ -50,13 +75,21 @@ class Film {
 
   // Mean over `samples_per_pixel` samples: one RGB layer per layer name (channels
   // R, G, B), then the spectral layer "S0" (channels "<centre>nm", decimal comma)
-  // if enabled. Metadata: color_space, samples_per_pixel, nonfinite_samples.
+  // if enabled, then one "<layer>_stderr" RGB layer per layer (standard error of
+  // the mean, same units). Metadata: color_space, samples_per_pixel, nonfinite_samples.
   Image to_image(double samples_per_pixel) const;
+
+  // The mean and its standard error of film pixel `pixel` (y·width + x) of a layer
+  // over n samples, RGB in the film's colour space (what to_image writes, in double).
+  RGB pixel_mean(int layer, size_t pixel, double n) const;
+  RGB pixel_standard_error(int layer, size_t pixel, double n) const;
 
   // Raw sums, for merging renders of the same view: (y·width + x)·3 + {X, Y, Z},
   // and (y·width + x)·bins + bin for the spectral sums.
   const std::vector<double>& raw_xyz(int layer) const { return xyz_[size_t(layer)]; }
   const std::vector<double>& raw_spectral() const { return spectral_; }
+  // Sums of squares of each sample's RGB (output colour space): (y·width + x)·3 + {R, G, B}.
+  const std::vector<double>& raw_rgb_squares(int layer) const { return rgb2_[size_t(layer)]; }
   // Adds another film's sums and non-finite count; throws std::invalid_argument
   // unless size, layers and spectral bins agree.
   void merge(const Film& other);
@@ -68,6 +101,7 @@ class Film {
   std::vector<std::string> layer_names_;
   ColorSpace color_space_;
   std::vector<std::vector<double>> xyz_;
+  std::vector<std::vector<double>> rgb2_;
   float spectral_min_nm_ = 0.f, spectral_max_nm_ = 0.f;
   int spectral_bins_ = 0;
   std::vector<double> spectral_;

@@ -107,10 +107,14 @@ RenderStats render(const Scene& scene, Film& film, const RenderOptions& options)
     film.merge(pass);
     done += count;
     if (options.on_pass) options.on_pass(done);
+    if (done < options.spp && options.stop_after_pass && options.stop_after_pass(film, done)) {
+      result.stopped_after_pass = true;
+      break;
+    }
   }
   if (progress) progress->finish();
   result.samples_done = done;
-  result.interrupted = done < options.spp;
+  result.interrupted = done < options.spp && !result.stopped_after_pass;
   for (const PathStats& s : stats) {
     result.paths.paths += s.paths;
     result.paths.fluorescence_events += s.fluorescence_events;

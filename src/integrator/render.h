@@ -35,12 +35,16 @@ struct RenderOptions {
   // Called after each completed pass, once `film` holds it, with the samples
   // done so far (counted from first_sample): the moment to write a checkpoint.
   std::function<void(int samples_done)> on_pass;
+  // Called after on_pass: true ends the render there (not an interruption), e.g.
+  // film/stopping_rule.h's check_stop for --target-error and --time-limit.
+  std::function<bool(const Film& film, int samples_done)> stop_after_pass;
 };
 
 struct RenderStats {
   double seconds = 0;
   int samples_done = 0;  // complete passes: every pixel has this many samples (including options.samples_done)
   bool interrupted = false;
+  bool stopped_after_pass = false;  // stop_after_pass ended the render before spp
   PathStats paths;
 };
 

@@ -67,6 +67,9 @@ void reduce_over_ranks(const RankGroup& g, const SampleRange& range, int done_he
     std::vector<double> v = o.film.raw_xyz(int(l));
     g.sum_to_root(v);
     if (g.rank == 0) set_raw_sums(o.film, int(l), v);
+    std::vector<double> v2 = o.film.raw_rgb_squares(int(l));
+    g.sum_to_root(v2);
+    if (g.rank == 0) set_raw_rgb_squares(o.film, int(l), v2);
   }
   if (o.film.spectral_bins() > 0) {
     std::vector<double> v = o.film.raw_spectral();

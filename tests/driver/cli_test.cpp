@@ -78,6 +78,8 @@ void expect_identical_sums(const std::filesystem::path& a, const std::filesystem
   EXPECT_EQ(ha.samples_done, hb.samples_done);
   for (size_t l = 0; l < fa.layer_names().size(); ++l)
     EXPECT_TRUE(fa.raw_xyz(int(l)) == fb.raw_xyz(int(l))) << "layer " << l;  // bitwise for finite doubles
+  for (size_t l = 0; l < fa.layer_names().size(); ++l)
+    EXPECT_TRUE(fa.raw_rgb_squares(int(l)) == fb.raw_rgb_squares(int(l))) << "squares, layer " << l;
   EXPECT_TRUE(fa.raw_spectral() == fb.raw_spectral());
 }
 
@@ -260,6 +262,49 @@ TEST(ReferenceCli, InterruptedReferenceResumesToTheUninterruptedOne) {
   const auto refused = run(other, dir / "refused.log");
   EXPECT_NE(refused.status, 0);
   EXPECT_NE(refused.output.find("seed"), std::string::npos) << refused.output;
+}
+
+std::string metadata_text(const Image& img, const char* key) {
+  const MetadataValue* v = img.metadata.find(key);
+  return v && std::holds_alternative<std::string>(*v) ? std::get<std::string>(*v) : "";
+}
+
+// --target-error stops at the first power-of-two look (>= 16 spp) that meets it;
+// --time-limit after the first pass past the limit; both exit 0 and say why.
+TEST(RenderCli, TargetErrorAndTimeLimitStopEarly) {
+  const TestDir dir;
+  auto r = run(render_args(dir / "easy.exr", {"--target-error", "100", "--spp", "64"}), dir / "easy.log");
+  ASSERT_EQ(r.status, 0) << r.output;
+  Image img = read_exr(dir / "easy.exr");
+  EXPECT_EQ(metadata_int(img, "spp"), 16);
+  EXPECT_EQ(metadata_text(img, "stop_reason"), "target error reached");
+  ASSERT_NE(img.find_layer("total_stderr"), nullptr);
+  r = run(render_args(dir / "hard.exr", {"--target-error", "1e-6", "--spp", "20", "--target-region", "0,0,8,8"}), dir / "hard.log");
+  ASSERT_EQ(r.status, 0) << r.output;
+  img = read_exr(dir / "hard.exr");
+  EXPECT_EQ(metadata_int(img, "spp"), 20);
+  EXPECT_EQ(metadata_text(img, "stop_reason"), "none");
+  ASSERT_NE(img.metadata.find("relative_error"), nullptr);
+  r = run(render_args(dir / "quick.exr", {"--time-limit", "0", "--spp", "64"}), dir / "quick.log");
+  ASSERT_EQ(r.status, 0) << r.output;
+  img = read_exr(dir / "quick.exr");
+  EXPECT_EQ(metadata_int(img, "spp"), 1);
+  EXPECT_EQ(metadata_text(img, "stop_reason"), "time limit reached");
+  r = run(render_args(dir / "bad.exr", {"--target-error", "0.1", "--target-region", "0,0,99,8"}), dir / "bad.log");
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("--target-region"), std::string::npos) << r.output;
+}
+
+TEST(MeasureCli, PrintsIntervalsAndWritesCsv) {
+  const TestDir dir;
+  const auto r = run({kExe, "measure", scene_file(), "--region", "10,8,14,12", "--resolution", "32x24", "--spp", "8", "--batches", "4",
+                      "--bands", "5", "--threads", "2", "--csv", (dir / "m.csv").string()},
+                     dir / "m.log");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("W m^-2 sr^-1 nm^-1"), std::string::npos) << r.output;
+  const std::string csv = read_text(dir / "m.csv");
+  EXPECT_EQ(csv.rfind("quantity,layer,channel,wavelength_nm,unit,mean,half_width", 0), 0u) << csv;
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 1 + 3 * 6 + 5) << csv;
 }
 
 TEST(MergeCli, TwoSampleRangesAndTwoCropsMergeToTheSingleRun) {

@@ -49,8 +49,9 @@ TEST(Film, ConstantSpectrumGivesItsXyzAndRgb) {
   EXPECT_NEAR(z.mean(), exact.z, 4 * z.sigma());
 
   const Image img = film.to_image(spp);
-  ASSERT_EQ(img.layers.size(), 1u);
+  ASSERT_EQ(img.layers.size(), 2u);  // the mean, then its standard error
   EXPECT_EQ(img.layers[0].name, "beauty");
+  EXPECT_EQ(img.layers[1].name, "beauty_stderr");
   EXPECT_EQ(img.layers[0].channels, (std::vector<std::string>{"R", "G", "B"}));
   const RGB expected = xyz_to_linear_srgb({x.mean(), y.mean(), z.mean()});
   const float* px = &img.layers[0].pixels[(1 * 3 + 1) * 3];
@@ -158,4 +159,51 @@ TEST(Film, MergeAddsSums) {
   // A moved film keeps its sums.
   const Film moved = std::move(first);
   EXPECT_NEAR(moved.raw_xyz(0)[(1 * 2 + 1) * 3 + 1], all.raw_xyz(0)[(1 * 2 + 1) * 3 + 1], 1e-9);
+}
+
+// The standard-error layer is that of the mean of the camera samples, each
+// sample's hero wavelengths summed first (one sample = one i.i.d. draw).
+TEST(Film, StandardErrorLayerIsTheErrorOfTheMeanOfCameraSamples) {
+  const Spectrum d65 = named_spectrum("D65").scaled(0.01f);
+  Film film(2, 1, {"beauty"}, ColorSpace::sRGB);
+  Rng rng(test_seed(31), 0);
+  const int spp = 500;
+  Stats r, g, b;
+  for (int k = 0; k < spp; ++k) {
+    const SampledWavelengths lambda = SampledWavelengths::sample_visible(rng.uniform(), 4);
+    const SampledSpectrum L = d65.sample(lambda);
+    film.add_sample(1, 0, 0, L, lambda);
+    const RGB e = xyz_to_linear_srgb(to_xyz(L, lambda));
+    r.add(e.r), g.add(e.g), b.add(e.b);
+  }
+  const Image img = film.to_image(spp);
+  const ImageLayer* se = img.find_layer("beauty_stderr");
+  ASSERT_NE(se, nullptr);
+  EXPECT_EQ(se->channels, (std::vector<std::string>{"R", "G", "B"}));
+  EXPECT_NEAR(se->pixels[3], r.sigma(), 1e-5 * r.sigma());
+  EXPECT_NEAR(se->pixels[4], g.sigma(), 1e-5 * g.sigma());
+  EXPECT_NEAR(se->pixels[5], b.sigma(), 1e-5 * b.sigma());
+  EXPECT_GT(se->pixels[4], 0.f);
+  for (int c = 0; c < 3; ++c) EXPECT_EQ(se->pixels[c], 0.f);  // no samples
+  // Merging two halves gives the same moments as one film.
+  Film half_a(2, 1, {"beauty"}, ColorSpace::sRGB), half_b(2, 1, {"beauty"}, ColorSpace::sRGB);
+  Rng again(test_seed(31), 0);
+  for (int k = 0; k < spp; ++k) {
+    const SampledWavelengths lambda = SampledWavelengths::sample_visible(again.uniform(), 4);
+    (k < 200 ? half_a : half_b).add_sample(1, 0, 0, d65.sample(lambda), lambda);
+  }
+  half_a.merge(half_b);
+  for (size_t i = 0; i < 6; ++i)
+    EXPECT_NEAR(half_a.raw_rgb_squares(0)[i], film.raw_rgb_squares(0)[i], 1e-12 * (1 + film.raw_rgb_squares(0)[i]));
+}
+
+TEST(Film, StandardErrorHelpersInvertEachOther) {
+  EXPECT_EQ(stderr_layer_name("total"), "total_stderr");
+  EXPECT_TRUE(is_stderr_layer("total_stderr"));
+  EXPECT_FALSE(is_stderr_layer("total"));
+  EXPECT_FALSE(is_stderr_layer("_stderr"));
+  EXPECT_EQ(stderr_base_name("fluorescence_stderr"), "fluorescence");
+  const double mean = 2.5, se = 0.125, n = 40;
+  EXPECT_NEAR(standard_error(mean, sum_of_squares(mean, se, n), n), se, 1e-12);
+  EXPECT_EQ(standard_error(mean, 1.0, 1), 0.0);
 }

@@ -1,0 +1,101 @@
+// The standard-error layer against the spread of independent renders, and the
+// error report that `converge` and `reference` print from it.
+#include "scratch_dir.h"
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdio>
+
+#include "analysis/analytic_slab.h"
+#include "analysis/image_error.h"
+#include "film/film.h"
+#include "integrator/render.h"
+#include "scene/scene_loader.h"
+#include "test_seed.h"
+
+using namespace chlorovdb;
+using chlorovdb::test::test_seed;
+
+namespace {
+
+Image render_image(const Scene& scene, uint64_t seed, int spp) {
+  Film film(scene.settings.width, scene.settings.height, film_layer_names(), scene.settings.color_space);
+  RenderOptions o;
+  o.spp = spp;
+  o.seed = seed;
+  render(scene, film, o);
+  return film.to_image(spp);
+}
+
+}  // namespace
+
+// R renders with different seeds. Per pixel p and channel, two unbiased estimates
+// of Var(mean of n samples): the between-render variance s_b² (R - 1 dof) and the
+// average of the R squared standard errors. Their difference D_p (summed over the
+// channels of a pixel) has mean 0; pixels are independent, so mean_p D_p must lie
+// within 4 standard errors (from the spread of D_p) of 0. The slab's
+// fluorescence is sampled with 4 hero wavelengths, whose lanes are correlated:
+// squaring lanes separately, or dividing by n instead of n - 1 at small n, fails this.
+TEST(StandardError, AgreesWithTheSpreadOfIndependentRenders) {
+  SlabCase slab = analytic_case("slab");
+  slab.name = "stderr_spread";
+  const Scene scene = load_scene(write_slab_scene(slab, chlorovdb::test::scratch_dir("analysis_tests")));
+  const int R = 12, spp = 4;
+  std::vector<Image> images;
+  for (int r = 0; r < R; ++r) images.push_back(render_image(scene, test_seed(500 + r), spp));
+  const size_t pixels = size_t(scene.settings.width) * scene.settings.height;
+  std::vector<double> d(pixels, 0.0);
+  double between_total = 0, stderr_total = 0;
+  for (size_t p = 0; p < pixels; ++p)
+    for (int c = 0; c < 3; ++c) {
+      double sum = 0, sum2 = 0, se2 = 0;
+      for (const Image& img : images) {
+        const double v = img.find_layer("total")->pixels[3 * p + c];
+        const double se = img.find_layer("total_stderr")->pixels[3 * p + c];
+        sum += v, sum2 += v * v, se2 += se * se;
+      }
+      const double between = (sum2 - sum * sum / R) / (R - 1);
+      d[p] += between - se2 / R;
+      between_total += between;
+      stderr_total += se2 / R;
+    }
+  double mean = 0, var = 0;
+  for (double v : d) mean += v / double(pixels);
+  for (double v : d) var += (v - mean) * (v - mean) / double(pixels - 1);
+  const double sigma = std::sqrt(var / double(pixels));
+  EXPECT_NEAR(mean, 0.0, 4 * sigma) << "between-render variance " << between_total << ", mean squared standard error "
+                                    << stderr_total;
+  EXPECT_GT(stderr_total, 0.0);
+  std::printf("between-render variance / mean squared standard error = %.4f (4 sigma = %.4f)\n", between_total / stderr_total,
+              4 * sigma * double(pixels) / stderr_total);
+  // The layer means something: 4 sigma is well below the variance itself.
+  EXPECT_LT(4 * sigma * double(pixels), 0.5 * stderr_total);
+}
+
+TEST(ImageError, ReportsTheReferencesOwnErrorAndDominantPixels) {
+  Image ref, est;
+  ref.width = est.width = 100;
+  ref.height = est.height = 10;
+  const size_t n = 1000 * 3;
+  ref.layers = {{"total", {"R", "G", "B"}, std::vector<float>(n, 1.f)}, {"total_stderr", {"R", "G", "B"}, std::vector<float>(n, 0.1f)}};
+  est.layers = {{"total", {"R", "G", "B"}, std::vector<float>(n, 1.f)}, {"total_stderr", {"R", "G", "B"}, std::vector<float>(n, 0.f)}};
+  for (size_t i = 0; i < n; ++i) est.layers[0].pixels[i] = 1.f + ((i / 3) % 2 ? 0.05f : -0.05f);
+  auto errors = image_errors(est, ref);
+  ASSERT_EQ(errors.size(), 1u);  // the stderr layer is not compared
+  EXPECT_NEAR(errors[0].reference_variance, 0.01, 1e-6);
+  EXPECT_NEAR(errors[0].mse, 0.0025, 1e-6);
+  EXPECT_NEAR(errors[0].top_pixel_share, 1.0 / 1000, 1e-6);  // uniform error: the worst pixel holds 1/1000
+  ASSERT_EQ(error_warnings(errors[0]).size(), 1u);
+  EXPECT_NE(error_warnings(errors[0])[0].find("reference's own error"), std::string::npos);
+  // One firefly: a single pixel holds most of the squared error.
+  est.layers[0].pixels[0] = 30.f;
+  ref.layers[1].pixels.assign(n, 0.f);
+  errors = image_errors(est, ref);
+  EXPECT_GT(errors[0].top_pixel_share, 0.9);
+  ASSERT_EQ(error_warnings(errors[0]).size(), 1u);
+  EXPECT_NE(error_warnings(errors[0])[0].find("worst"), std::string::npos);
+  const ReferenceSelfError self = reference_self_error(ref, "total");
+  EXPECT_TRUE(self.available);
+  EXPECT_EQ(self.rms_stderr, 0.0);
+  EXPECT_FALSE(reference_self_error(ref, "fluorescence").available);
+}
