@@ -9,6 +9,7 @@
 #include "analysis/scene_variant.h"
 #include "cli/commands.h"
 #include "core/error.h"
+#include "scene/scene_loader.h"
 
 namespace chlorovdb::cli {
 
@@ -34,7 +35,7 @@ int measure(const MeasureArgs& a) {
   o.fluorescence = a.fluorescence;
   o.transmittance = a.transmittance;
   if (a.resolution) parse_resolution(*a.resolution, o);
-  const Scene scene = load_scene_variant(a.scene, o, a.sets);
+  const Scene scene = load_scene(a.scene, o, a.sets);
   const PixelWindow region = parse_crop(a.region, scene.settings.width, scene.settings.height, "--region");
   MeasureOptions mo = a.options;
   mo.seed = scene.settings.seed;
@@ -83,15 +84,15 @@ Command add_measure_command(CLI::App& app) {
   sub->add_option("scene", r.scene, "Scene file")->required()->check(RegularFile);
   sub->add_option("--region", r.region, "Pixels x0,y0,x1,y1 (x1, y1 exclusive)")->required();
   sub->add_option("--spp", r.options.spp, "Samples per pixel (rounded up to a multiple of --batches; default 256)")
-      ->check(CLI::Range(2, 1 << 24));
-  sub->add_option("--batches", r.options.batches, "Independent batches for the interval (default 16)")->check(CLI::Range(2, 4096));
-  sub->add_option("--bands", r.options.bands, "Spectral bands over 360-830 nm (default 47: 10 nm)")->check(CLI::Range(1, 4700));
+      ->check(Integer(2, kMaxSpp));
+  sub->add_option("--batches", r.options.batches, "Independent batches for the interval (default 16)")->check(Integer(2, 4096));
+  sub->add_option("--bands", r.options.bands, "Spectral bands over 360-830 nm (default 47: 10 nm)")->check(Integer(1, 4700));
   sub->add_option("--confidence", r.options.confidence, "Confidence level of the intervals (default 0.95)")
-      ->check(CLI::Range(0.5, 0.999999));
-  sub->add_option("--threads", r.options.threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 1024));
-  sub->add_option("--seed", r.seed, "Seed of the per-pixel random streams");
+      ->check(Real(0.5, 0.999999));
+  sub->add_option("--threads", r.options.threads, "Worker threads (default: all cores)")->check(Integer(1, kMaxThreads));
+  sub->add_option("--seed", r.seed, "Seed of the per-pixel random streams")->check(Unsigned64);
   sub->add_option("--resolution", r.resolution, "Image size WxH");
-  sub->add_option("--wavelengths", r.wavelengths, "Wavelengths per camera path")->check(CLI::Range(1, 16));
+  sub->add_option("--wavelengths", r.wavelengths, "Wavelengths per camera path")->check(Integer(1, kMaxWavelengths));
   sub->add_option("--fluorescence", r.fluorescence, "auto | direct | full | reference | off");
   sub->add_option("--transmittance", r.transmittance, "auto | ratio | residual_ratio | delta");
   sub->add_option("--set", r.sets, "KEY=VALUE: change any scene key (repeatable)");
