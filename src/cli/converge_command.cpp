@@ -11,6 +11,7 @@
 #include "analysis/scene_variant.h"
 #include "analysis/svg_plot.h"
 #include "cli/commands.h"
+#include "cli/scene_overrides.h"
 #include "core/error.h"
 #include "film/film.h"
 #include "io/image.h"
@@ -115,12 +116,7 @@ int converge(const ConvergeArgs& a) {
   if (a.reference.empty() && a.analytic.empty())
     throw InputError("command line", "--reference", "", "give a reference image or --analytic NAME");
   if (a.analytic.empty() && a.scene.empty()) throw InputError("command line", "scene", "", "a scene file is required");
-  SceneOverrides o;
-  o.seed = a.seed;
-  o.wavelengths = a.wavelengths;
-  o.fluorescence = a.fluorescence;
-  o.transmittance = a.transmittance;
-  if (a.resolution) parse_resolution(*a.resolution, o);
+  const SceneOverrides o = scene_overrides(a);
   const std::filesystem::path prefix = a.output;
   if (prefix.has_parent_path()) std::filesystem::create_directories(prefix.parent_path());
   const std::string label = a.label.empty() ? prefix.filename().string() : a.label;

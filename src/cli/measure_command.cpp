@@ -8,6 +8,7 @@
 #include "analysis/measure.h"
 #include "analysis/scene_variant.h"
 #include "cli/commands.h"
+#include "cli/scene_overrides.h"
 #include "core/error.h"
 #include "scene/scene_loader.h"
 
@@ -29,12 +30,7 @@ struct MeasureArgs {
 std::string pm(const Interval& i) { return fmt::format("{:.6e} ± {:.2e}", i.mean, i.half_width); }
 
 int measure(const MeasureArgs& a) {
-  SceneOverrides o;
-  o.seed = a.seed;
-  o.wavelengths = a.wavelengths;
-  o.fluorescence = a.fluorescence;
-  o.transmittance = a.transmittance;
-  if (a.resolution) parse_resolution(*a.resolution, o);
+  const SceneOverrides o = scene_overrides(a);
   const Scene scene = load_scene(a.scene, o, a.sets);
   const PixelWindow region = parse_crop(a.region, scene.settings.width, scene.settings.height, "--region");
   MeasureOptions mo = a.options;

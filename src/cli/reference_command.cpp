@@ -8,6 +8,7 @@
 #include "analysis/image_error.h"
 #include "analysis/scene_variant.h"
 #include "cli/commands.h"
+#include "cli/scene_overrides.h"
 #include "core/error.h"
 #include "io/image.h"
 #include "session/interrupt.h"
@@ -58,12 +59,7 @@ Command add_reference_command(CLI::App& app) {
 namespace {
 
 int reference(const ReferenceArgs& a) {
-  SceneOverrides o;
-  o.seed = a.seed;
-  o.wavelengths = a.wavelengths;
-  o.fluorescence = a.fluorescence;
-  o.transmittance = a.transmittance;
-  if (a.resolution) parse_resolution(*a.resolution, o);
+  const SceneOverrides o = scene_overrides(a);
   const Scene scene = load_scene(a.scene, o, a.sets);
   std::filesystem::path out = a.output;
   if (out.extension() != ".exr") out += ".exr";

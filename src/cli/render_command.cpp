@@ -22,6 +22,7 @@
 #include "checkpoint/partition.h"
 #include "analysis/scene_variant.h"
 #include "cli/commands.h"
+#include "cli/scene_overrides.h"
 #include "cli/stopping_options.h"
 #include "core/error.h"
 #include "io/image.h"
@@ -117,14 +118,9 @@ void reduce_sum(std::vector<double>& v) {
 #endif
 
 int render(const RenderArgs& a) {
-  SceneOverrides o;
+  SceneOverrides o = scene_overrides(a);
   o.spp = a.spp;
   if (a.target_error && !a.spp && !a.sample_range) o.spp = kTargetErrorMaxSpp;
-  o.seed = a.seed;
-  o.wavelengths = a.wavelengths;
-  o.fluorescence = a.fluorescence;
-  o.transmittance = a.transmittance;
-  if (a.resolution) parse_resolution(*a.resolution, o);
   RenderJob job;
   if (a.sample_range) job.samples = parse_sample_range(*a.sample_range);
   const Scene scene = load_scene(a.scene, o, a.sets);

@@ -81,8 +81,10 @@ TEST(Medium, GridConcentrationIsLookedUpInWorldSpace) {
   for (int i = 0; i < 4; ++i) EXPECT_NEAR(st[i], mp.sigma_a[i] + mp.sigma_s[i], 1e-4f);
   const auto region = m.grid_region();
   ASSERT_TRUE(region);
-  EXPECT_EQ(region->index_bounds.lo.x, -0.5f);
-  EXPECT_EQ(region->index_bounds.hi.x, 15.5f);
+  // Voxels 0..15 hold data; a trilinear lookup is non-zero up to one voxel past
+  // the outer centres, so the medium's box is [-1, 16] (grids/vdb_file.cpp).
+  EXPECT_EQ(region->index_bounds.lo.x, -1.f);
+  EXPECT_EQ(region->index_bounds.hi.x, 16.f);
 }
 
 TEST(Medium, ScatteringIsThePropertiesScatteringPart) {
