@@ -163,11 +163,16 @@ class ChlorovdbTest(unittest.TestCase):
     def test_render_layers_are_float32_hxwx3_and_add_up(self):
         scene = chlorovdb.load_scene(self.write_scene("dye", DYE_SCENE))
         result = chlorovdb.render(scene, spp=4, threads=1, seed=3)
-        self.assertEqual(set(result.layers), {"total", "fluorescence", "nonfluorescence"})
+        means = {"total", "fluorescence", "nonfluorescence"}
+        self.assertEqual(set(result.layers), means | {m + "_stderr" for m in means})
         for name, image in result.layers.items():
             self.assertEqual(image.shape, (6, 8, 3), name)
             self.assertEqual(image.dtype, np.float32, name)
             self.assertTrue(np.all(np.isfinite(image)), name)
+        for m in means:  # the standard error of each pixel's mean: never negative, zero where the mean is
+            err = result[m + "_stderr"]
+            self.assertTrue(np.all(err >= 0), m)
+            self.assertTrue(np.all(err[result[m] == 0] == 0), m)
         total, fl, other = result["total"], result["fluorescence"], result["nonfluorescence"]
         np.testing.assert_allclose(total, fl + other, rtol=1e-4, atol=1e-7)
         self.assertGreater(float(fl.sum()), 0.0)
