@@ -98,12 +98,7 @@ Command add_converge_command(CLI::App& app) {
   sub->add_option("--clock", r.clock, "What time budgets and efficiency count: wall (default) | cpu (process CPU time, robust on a shared machine)")
       ->check(CLI::IsMember({"wall", "cpu"}));
   sub->add_option("--threads", r.threads, "Worker threads (default: all cores)")->check(Integer(1, kMaxThreads));
-  sub->add_option("--seed", r.seed, "Seed of the per-pixel random streams")->check(Unsigned64);
-  sub->add_option("--resolution", r.resolution, "Image size WxH (must match the reference)");
-  sub->add_option("--wavelengths", r.wavelengths, "Wavelengths per camera path")->check(Integer(1, kMaxWavelengths));
-  sub->add_option("--fluorescence", r.fluorescence, "auto | direct | full | reference | off");
-  sub->add_option("--transmittance", r.transmittance, "auto | ratio | residual_ratio | delta");
-  sub->add_option("--set", r.sets, "KEY=VALUE: change any scene key, e.g. render.skip_unneeded_work=false (repeatable)");
+  add_scene_options(sub, r);
   sub->add_option("--label", r.label, "Name of this variant in the CSV and plot (default: the output prefix's name)");
   sub->add_flag("--save-images", r.save_images, "Also write PREFIX_sppN.exr at every point");
   sub->add_option("-o,--output", r.output, "Output prefix: writes PREFIX.csv and PREFIX.svg")->required();

@@ -86,12 +86,7 @@ Command add_measure_command(CLI::App& app) {
   sub->add_option("--confidence", r.options.confidence, "Confidence level of the intervals (default 0.95)")
       ->check(Real(0.5, 0.999999));
   sub->add_option("--threads", r.options.threads, "Worker threads (default: all cores)")->check(Integer(1, kMaxThreads));
-  sub->add_option("--seed", r.seed, "Seed of the per-pixel random streams")->check(Unsigned64);
-  sub->add_option("--resolution", r.resolution, "Image size WxH");
-  sub->add_option("--wavelengths", r.wavelengths, "Wavelengths per camera path")->check(Integer(1, kMaxWavelengths));
-  sub->add_option("--fluorescence", r.fluorescence, "auto | direct | full | reference | off");
-  sub->add_option("--transmittance", r.transmittance, "auto | ratio | residual_ratio | delta");
-  sub->add_option("--set", r.sets, "KEY=VALUE: change any scene key (repeatable)");
+  add_scene_options(sub, r);
   sub->add_option("--csv", r.csv, "Also write every value as CSV");
   return {sub, [args] { return measure(*args); }};
 }

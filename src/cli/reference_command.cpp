@@ -46,12 +46,7 @@ Command add_reference_command(CLI::App& app) {
       ->check(Real(0, 1e9));
   sub->add_flag("--resume", r.resume, "Continue from the checkpoint OUTPUT.ckpt (the exact film sums) the last run left");
   sub->add_option("--threads", r.threads, "Worker threads (default: all cores)")->check(Integer(1, kMaxThreads));
-  sub->add_option("--seed", r.seed, "Seed of the per-pixel random streams")->check(Unsigned64);
-  sub->add_option("--resolution", r.resolution, "Image size WxH");
-  sub->add_option("--wavelengths", r.wavelengths, "Wavelengths per camera path")->check(Integer(1, kMaxWavelengths));
-  sub->add_option("--fluorescence", r.fluorescence, "auto | direct | full | reference | off");
-  sub->add_option("--transmittance", r.transmittance, "auto | ratio | residual_ratio | delta");
-  sub->add_option("--set", r.sets, "KEY=VALUE: change any scene key (repeatable)");
+  add_scene_options(sub, r);
   sub->add_flag("-q,--quiet", r.quiet, "No progress bar");
   return {sub, [args] { return reference(*args); }};
 }

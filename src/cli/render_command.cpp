@@ -67,12 +67,8 @@ Command add_render_command(CLI::App& app) {
   sub->add_option("-o,--output", r.output, "Output EXR (default: the scene's name in the current folder)");
   auto* spp = sub->add_option("--spp", r.spp, "Samples per pixel")->check(Integer(1, kMaxSpp));
   sub->add_option("--threads", r.threads, "Worker threads (default: all cores)")->check(Integer(1, kMaxThreads));
-  sub->add_option("--seed", r.seed, "Seed of the per-pixel random streams")->check(Unsigned64);
-  sub->add_option("--resolution", r.resolution, "Image size WxH, e.g. 640x480");
-  sub->add_option("--wavelengths", r.wavelengths, "Wavelengths per camera path")->check(Integer(1, kMaxWavelengths));
+  add_scene_options(sub, r);
   sub->add_option("--exposure", r.exposure, "PNG preview exposure in stops")->check(Real(-40, 40));
-  sub->add_option("--fluorescence", r.fluorescence, "auto | direct | full | reference | off");
-  sub->add_option("--transmittance", r.transmittance, "auto | ratio | residual_ratio | delta");
   sub->add_option("--crop", r.crop,
                   "Render only pixels [x0, x1) x [y0, y1) as x0,y0,x1,y1; the EXR has the crop's size and its place in "
                   "metadata (`chlorovdb merge` reassembles crops)");
@@ -89,7 +85,6 @@ Command add_render_command(CLI::App& app) {
                 "Continue from --checkpoint if it exists (start fresh if not); refused when the scene file, seed, size, "
                 "crop or settings differ")
       ->needs(ckpt);
-  sub->add_option("--set", r.sets, "KEY=VALUE: change any scene key, e.g. media.solution.pigments[0].concentration=5 (repeatable)");
   sub->add_flag("-q,--quiet", r.quiet, "No progress bar");
   auto* target = sub->add_option("--target-error", r.target_error,
                                  "Stop once the relative standard error of the image (or --target-region) is at most this, "
