@@ -1,6 +1,7 @@
 #pragma once
 // `chlorovdb measure`: the mean radiance of a pixel region with a confidence
-// interval, as a virtual sensor would report it.
+// interval, as a virtual sensor would report it (a --region, or each of the
+// scene's named `sensors`, scene/scene.h).
 //
 // Batch means: the region is rendered `batches` times over disjoint sample ranges
 // (samples [k m, (k + 1) m) of every pixel, m = spp / batches); each batch's region

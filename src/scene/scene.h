@@ -85,6 +85,13 @@ struct ShapeBinding {
   int area_light = -1;  // index into Scene::lights
 };
 
+// A named pixel region of the image (pixels [x0, x1) x [y0, y1), in the scene's
+// resolution after overrides): what `chlorovdb measure` reports without --region.
+struct Sensor {
+  std::string name;
+  int x0 = 0, y0 = 0, x1 = 0, y1 = 0;
+};
+
 struct Scene {
   explicit Scene(Camera camera_) : camera(std::move(camera_)) {}
   std::filesystem::path file;
@@ -102,6 +109,7 @@ struct Scene {
   std::vector<MediumPolicy> medium_policy;  // per medium, resolved at load (resolve_medium_policies)
   std::vector<std::vector<FluorescentPigment>> fluorescence;  // per medium
   int camera_medium = -1;
+  std::vector<Sensor> sensors;  // by name
   std::vector<std::string> warnings;  // loader's doubts about the scene (e.g. a grid's length unit); printed by render
   std::vector<std::string> notes;     // what the loader changed (e.g. a double grid converted to float); printed by render
 

@@ -109,6 +109,24 @@ RenderSettings read_render_settings(ParamReader& top, const SceneOverrides& o, s
   return s;
 }
 
+// "sensors": {"name": {"region": [x0, y0, x1, y1]}}: whole pixel indices with
+// x0 < x1 <= width, y0 < y1 <= height of the image being rendered.
+std::vector<Sensor> read_sensors(ParamReader& top, const RenderSettings& s) {
+  std::vector<Sensor> sensors;
+  for (auto& [name, sensor] : top.children_map("sensors")) {
+    const std::vector<float> r = sensor.get_floats("region", {});
+    if (r.size() != 4) sensor.fail("region", "expected [x0, y0, x1, y1] (pixels, x1 and y1 exclusive)");
+    for (float v : r)
+      if (v != std::floor(v)) sensor.fail("region", "pixel indices must be whole numbers");
+    if (r[0] < 0 || r[1] < 0 || r[2] > s.width || r[3] > s.height)
+      sensor.fail("region", fmt::format("lies outside the {}x{} image", s.width, s.height));
+    if (!(r[0] < r[2] && r[1] < r[3])) sensor.fail("region", "needs x0 < x1 and y0 < y1 (an empty or inverted region)");
+    sensor.finish();
+    sensors.push_back({name, int(r[0]), int(r[1]), int(r[2]), int(r[3])});
+  }
+  return sensors;
+}
+
 // The camera; its eye and target points (metres) go to *eye and *target.
 Camera read_camera(ParamReader& top, const RenderSettings& s, float unit, Vec3* eye_out, Vec3* target_out) {
   ParamReader c = top.child("camera");
@@ -422,6 +440,7 @@ Scene load_scene(const nlohmann::json& json, const std::filesystem::path& file, 
   Scene scene(read_camera(top, settings, unit, &scene_eye, &scene_target));
   scene.file = file;
   scene.settings = settings;
+  scene.sensors = read_sensors(top, settings);
 
   // Pigments and media.
   const PigmentTable pigments = read_pigments(top);

@@ -307,6 +307,39 @@ TEST(MeasureCli, PrintsIntervalsAndWritesCsv) {
   EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 1 + 3 * 6 + 5) << csv;
 }
 
+TEST(MeasureCli, ReportsEverySensorByNameWithoutARegion) {
+  const TestDir dir;
+  std::string json = read_text(scene_file());
+  json.insert(json.rfind('}'), R"(, "sensors": {"left": {"region": [0, 0, 4, 4]}, "centre": {"region": [14, 10, 18, 14]}})");
+  std::ofstream(dir / "sensors.json") << json;
+  const std::vector<std::string> base = {kExe, "measure", (dir / "sensors.json").string(), "--resolution", "32x24", "--spp", "4",
+                                         "--batches", "2", "--bands", "2", "--threads", "2"};
+  auto args = base;
+  args.insert(args.end(), {"--csv", (dir / "s.csv").string()});
+  auto r = run(args, dir / "s.log");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("sensor \"left\": region 0,0,4,4"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("sensor \"centre\": region 14,10,18,14"), std::string::npos) << r.output;
+  const std::string csv = read_text(dir / "s.csv");
+  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 2 * (1 + 3 * 6 + 2)) << csv;
+  EXPECT_NE(csv.find("\"14,10,18,14\",centre\n"), std::string::npos) << csv;
+  // --region overrides the sensors; a sensor outside a smaller --resolution is refused by name.
+  args = base;
+  args.insert(args.end(), {"--region", "1,1,2,2"});
+  r = run(args, dir / "r.log");
+  ASSERT_EQ(r.status, 0) << r.output;
+  EXPECT_EQ(r.output.find("sensor \""), std::string::npos) << r.output;
+  args = base;
+  args[4] = "16x12";
+  r = run(args, dir / "small.log");
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("sensors.centre.region"), std::string::npos) << r.output;
+  // No sensors and no --region: told what to give.
+  r = run({kExe, "measure", scene_file(), "--resolution", "8x8", "--spp", "2", "--batches", "2"}, dir / "none.log");
+  EXPECT_EQ(r.status, 1) << r.output;
+  EXPECT_NE(r.output.find("--region"), std::string::npos) << r.output;
+}
+
 TEST(MergeCli, TwoSampleRangesAndTwoCropsMergeToTheSingleRun) {
   const TestDir dir;
   const auto ref = run(render_args(dir / "single.exr", {"--spp", "16", "--checkpoint", (dir / "single.ckpt").string()}), dir / "single.log");

@@ -196,3 +196,24 @@ TEST(HostileScene, TruncatedGridFileIsRefused) {
   }
   EXPECT_NO_THROW(inspect_vdb(whole));
 }
+
+TEST(HostileScene, SensorRegionsMustBeWholePixelsInsideTheImage) {
+  const std::string cam = R"({"position": [0, 1, 5], "look_at": [0, 0, 0]})", render = R"({"resolution": [8, 6], "spp": 1})",
+                    lights = R"([{"type": "point", "position": [0, 3, 0]}])";
+  const auto sensors = [&](const std::string& s) { return scene(cam, render, lights, R"(, "sensors": )" + s); };
+  const Scene ok = load_scene(write("sensors.json", sensors(R"({"glow": {"region": [1, 2, 5, 6]}, "dark": {"region": [0, 0, 8, 1]}})")));
+  ASSERT_EQ(ok.sensors.size(), 2u);
+  EXPECT_EQ(ok.sensors[0].name, "dark");  // by name
+  EXPECT_EQ(ok.sensors[1].name, "glow");
+  EXPECT_EQ(ok.sensors[1].x0, 1);
+  EXPECT_EQ(ok.sensors[1].y1, 6);
+  expect_error(sensors(R"({"glow": {"region": [1, 2, 9, 6]}})"), {"sensors.glow.region", "[1,2,9,6]", "outside the 8x6 image"});
+  expect_error(sensors(R"({"glow": {"region": [-1, 2, 3, 4]}})"), {"sensors.glow.region", "outside"});
+  expect_error(sensors(R"({"glow": {"region": [5, 2, 1, 6]}})"), {"sensors.glow.region", "inverted"});
+  expect_error(sensors(R"({"glow": {"region": [1, 2, 1, 6]}})"), {"sensors.glow.region", "empty"});
+  expect_error(sensors(R"({"glow": {"region": [1.5, 2, 3, 6]}})"), {"sensors.glow.region", "1.5", "whole numbers"});
+  expect_error(sensors(R"({"glow": {"region": [1, 2, 3]}})"), {"sensors.glow.region", "[x0, y0, x1, y1]"});
+  expect_error(sensors(R"({"glow": {"region": [1, 2, 3, 4], "shape": "disk"}})"), {"sensors.glow.shape", "unknown key"});
+  expect_error(sensors(R"({"glow": {}})"), {"sensors.glow.region"});
+  expect_error(sensors(R"([1, 2])"), {"sensors", "object"});
+}
