@@ -21,6 +21,7 @@
 #include <optional>
 #include <string>
 
+#include <fmt/format.h>
 #include <nlohmann/json.hpp>
 
 #include "checkpoint/partition.h"
@@ -177,7 +178,13 @@ RenderResult render_scene(const Scene& scene, const std::string& scene_hash, std
     py::gil_scoped_release release;
     outcome = run_render_session(scene, job);
   }
-  if (outcome->interrupted) throw py::error_already_set();
+  // Ctrl-C: PyErr_CheckSignals ran Python's handler, whose exception is pending.
+  // Take it out (the result needs the interpreter), build what the finished
+  // passes hold and raise KeyboardInterrupt carrying it as `.result`; a signal
+  // handler that raised anything else, or no finished pass, re-raises as is.
+  std::optional<py::error_already_set> pending;
+  if (outcome->interrupted && PyErr_Occurred()) pending.emplace();
+  if (pending && (!pending->matches(PyExc_KeyboardInterrupt) || outcome->samples_done == 0)) throw std::move(*pending);
   if (outcome->samples_done == 0) throw std::runtime_error("render: no pass completed");
 
   const Image image = session_image(scene, job, *outcome);
@@ -203,6 +210,14 @@ RenderResult render_scene(const Scene& scene, const std::string& scene_hash, std
   r.paths = outcome->paths;
   for (const auto& [key, value] : image.metadata.entries) r.metadata[py::str(key)] = metadata_value(value);
   r.metadata["seed"] = job_seed(scene, job);
+  if (pending) {
+    py::object interrupt = py::reinterpret_borrow<py::object>(PyExc_KeyboardInterrupt)(fmt::format(
+        "render interrupted after {} of {} samples per pixel; the exception's .result holds them", r.samples_per_pixel,
+        outcome->range.size()));
+    interrupt.attr("result") = py::cast(std::move(r));
+    PyErr_SetObject(PyExc_KeyboardInterrupt, interrupt.ptr());
+    throw py::error_already_set();
+  }
   return r;
 }
 

@@ -8,7 +8,12 @@ import json
 import math
 import os
 import pathlib
+import signal
+import subprocess
+import sys
 import tempfile
+import textwrap
+import time
 import unittest
 
 import numpy as np
@@ -159,6 +164,51 @@ class ChlorovdbTest(unittest.TestCase):
         self.assertEqual(resumed.metadata["resumed_at_spp"], 3)
         for name in whole.layers:
             np.testing.assert_array_equal(resumed[name], whole[name], name)
+
+    def test_ctrl_c_raises_keyboard_interrupt_carrying_the_finished_passes(self):
+        # A child process renders far more samples than it will finish; SIGINT (what
+        # Ctrl-C sends) once it is rendering stops it at the end of the current pass.
+        scene_path = self.write_scene("interrupt", DYE_SCENE)
+        ckpt = self.dir / "interrupt.ckpt"
+        child = textwrap.dedent(f"""
+            import json, sys
+            import numpy as np
+            import chlorovdb
+            scene = chlorovdb.load({str(scene_path)!r})
+            print("rendering", flush=True)
+            try:
+                chlorovdb.render(scene, spp=1 << 22, threads=1, seed=5, checkpoint={str(ckpt)!r})
+                print(json.dumps({{"returned": True}}))
+            except KeyboardInterrupt as e:
+                r = e.result
+                print(json.dumps({{"message": str(e), "spp": r.samples_per_pixel, "meta_spp": r.metadata["spp"],
+                                  "interrupted": r.metadata["interrupted"], "shape": list(r["total"].shape),
+                                  "finite": bool(np.all(np.isfinite(r["total"]))), "mean": float(r["total"].mean())}}))
+        """)
+        proc = subprocess.Popen([sys.executable, "-c", child], stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+        try:
+            self.assertEqual(proc.stdout.readline().strip(), "rendering")
+            time.sleep(1.0)  # into the render (a pass of 8x6 pixels takes well under a millisecond)
+            proc.send_signal(signal.SIGINT)
+            out, err = proc.communicate(timeout=60)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+        self.assertEqual(proc.returncode, 0, err)
+        report = json.loads(out.strip().splitlines()[-1])
+        self.assertNotIn("returned", report, "the render ran to the end instead of stopping")
+        self.assertGreater(report["spp"], 0)
+        self.assertLess(report["spp"], 1 << 22)
+        self.assertEqual(report["meta_spp"], report["spp"])
+        self.assertEqual(report["interrupted"], 1)
+        self.assertEqual(report["shape"], [6, 8, 3])
+        self.assertTrue(report["finite"])
+        self.assertGreater(report["mean"], 0)
+        self.assertIn(f"after {report['spp']} of {1 << 22}", report["message"])
+        # The checkpoint holds the same passes, so the render can resume.
+        scene = chlorovdb.load(scene_path)
+        resumed = chlorovdb.render(scene, spp=report["spp"] + 1, threads=1, seed=5, checkpoint=ckpt, resume=True)
+        self.assertEqual(resumed.metadata["resumed_at_spp"], report["spp"])
 
     def test_render_layers_are_float32_hxwx3_and_add_up(self):
         scene = chlorovdb.load_scene(self.write_scene("dye", DYE_SCENE))
