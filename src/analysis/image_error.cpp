@@ -82,7 +82,7 @@ std::vector<LayerError> image_errors(const Image& estimate, const Image& referen
   std::vector<LayerError> errors;
   for (const ImageLayer& r : reference.layers) {
     const ImageLayer* x = estimate.find_layer(r.name);
-    if (is_stderr_layer(r.name) || !x || x->channels != r.channels || x->pixels.size() != r.pixels.size()) continue;
+    if (is_stderr_layer(r.name) || is_aov_layer(r.name) || !x || x->channels != r.channels || x->pixels.size() != r.pixels.size()) continue;
     const ImageLayer* r_stderr = reference.find_layer(stderr_layer_name(r.name));
     if (r_stderr && r_stderr->channels != r.channels) r_stderr = nullptr;
     errors.push_back(layer_error(*x, r, r_stderr));

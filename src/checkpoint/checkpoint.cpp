@@ -20,7 +20,8 @@ namespace chlorovdb {
 namespace {
 
 constexpr char kMagic[8] = {'C', 'H', 'L', 'V', 'D', 'B', 'C', 'K'};
-constexpr uint32_t kFormatVersion = 2;  // 2: sums of squares (standard error) after the sums
+constexpr uint32_t kFormatVersion = 3;  // 2: sums of squares (standard error) after the sums; 3: AOV sums last
+constexpr uint32_t kOldestReadable = 2;
 static_assert(std::endian::native == std::endian::little, "checkpoints are little-endian");
 
 // Film sums are only reachable through const accessors (film/film.h); the Film
@@ -28,6 +29,7 @@ static_assert(std::endian::native == std::endian::little, "checkpoints are littl
 std::vector<double>& mutable_xyz(Film& film, int layer) { return const_cast<std::vector<double>&>(film.raw_xyz(layer)); }
 std::vector<double>& mutable_rgb2(Film& film, int layer) { return const_cast<std::vector<double>&>(film.raw_rgb_squares(layer)); }
 std::vector<double>& mutable_spectral(Film& film) { return const_cast<std::vector<double>&>(film.raw_spectral()); }
+std::vector<double>& mutable_aovs(Film& film) { return const_cast<std::vector<double>&>(film.raw_aovs()); }
 
 // Word-wise 64-bit hash (FNV-style multiply-xor with a final mix): catches torn or corrupted files.
 struct Checksum {
@@ -69,11 +71,12 @@ nlohmann::json header_json(const CheckpointHeader& h, const Film& film) {
   j["layers"] = film.layer_names();
   j["color_space"] = color_space_name(film.color_space());
   j["spectral"] = {{"min_nm", film.spectral_min_nm()}, {"max_nm", film.spectral_max_nm()}, {"bins", film.spectral_bins()}};
+  j["aovs"] = aov_list(film.aovs());
   return j;
 }
 
-size_t payload_doubles(int w, int h, size_t layers, int bins) {
-  return size_t(w) * size_t(h) * (6 * layers + size_t(bins));
+size_t payload_doubles(int w, int h, size_t layers, int bins, AovMask aovs) {
+  return size_t(w) * size_t(h) * (6 * layers + size_t(bins) + (aovs ? Film::kAovSums : 0));
 }
 
 struct Parsed {
@@ -82,6 +85,7 @@ struct Parsed {
   ColorSpace color_space = ColorSpace::sRGB;
   float spectral_min = 0, spectral_max = 0;
   int bins = 0;
+  AovMask aovs = 0;
   uint64_t header_bytes = 0;  // offset of the payload
   Checksum checksum;          // over everything up to the payload
 };
@@ -96,8 +100,9 @@ Parsed parse(std::FILE* f, const std::filesystem::path& file) {
   uint64_t length = 0;
   if (std::fread(magic, 1, 8, f) != 8 || std::memcmp(magic, kMagic, 8) != 0)
     throw bad("", "", "not a chlorovdb checkpoint (missing the CHLVDBCK magic)");
-  if (std::fread(&version, 4, 1, f) != 1 || version != kFormatVersion)
-    throw bad("format version", std::to_string(version), fmt::format("this build reads version {}", kFormatVersion));
+  if (std::fread(&version, 4, 1, f) != 1 || version < kOldestReadable || version > kFormatVersion)
+    throw bad("format version", std::to_string(version),
+              fmt::format("this build reads versions {} to {}", kOldestReadable, kFormatVersion));
   if (std::fread(&length, 8, 1, f) != 1 || length > (64u << 20)) throw bad("header length", std::to_string(length), "truncated or corrupt");
   std::string text(length, '\0');
   if (std::fread(text.data(), 1, length, f) != length) throw bad("header", "", "truncated file");
@@ -128,6 +133,11 @@ Parsed parse(std::FILE* f, const std::filesystem::path& file) {
     p.spectral_min = j.at("spectral").at("min_nm").get<float>();
     p.spectral_max = j.at("spectral").at("max_nm").get<float>();
     p.bins = j.at("spectral").at("bins").get<int>();
+    if (version >= 3) {
+      std::string unknown;
+      p.aovs = aov_mask(j.at("aovs").get<std::vector<std::string>>(), &unknown);
+      if (!unknown.empty()) throw bad("aovs", unknown, "not an AOV this build knows");
+    }
   } catch (const nlohmann::json::exception& e) {
     throw bad("header", "", fmt::format("corrupt JSON header: {}", e.what()));
   }
@@ -185,6 +195,7 @@ void write_checkpoint(const std::filesystem::path& file, const CheckpointHeader&
   for (size_t l = 0; l < film.layer_names().size(); ++l)
     put(film.raw_rgb_squares(int(l)).data(), film.raw_rgb_squares(int(l)).size() * 8);
   put(film.raw_spectral().data(), film.raw_spectral().size() * 8);
+  put(film.raw_aovs().data(), film.raw_aovs().size() * 8);
   const uint64_t checksum = sum.h;
   if (std::fwrite(&checksum, 8, 1, f.get()) != 1 || std::fflush(f.get()) != 0 || ::fsync(::fileno(f.get())) != 0)
     fail_write(file, tmp, std::strerror(errno));
@@ -218,13 +229,14 @@ Film read_checkpoint(const std::filesystem::path& file, CheckpointHeader* header
   Parsed p = parse(f.get(), file);
   const int w = p.header.crop.width(), h = p.header.crop.height();
   std::error_code ec;
-  const uint64_t expected = p.header_bytes + 8 * payload_doubles(w, h, p.layers.size(), p.bins) + 8;
+  const uint64_t expected = p.header_bytes + 8 * payload_doubles(w, h, p.layers.size(), p.bins, p.aovs) + 8;
   const uint64_t actual = std::filesystem::file_size(file, ec);
   if (ec || actual != expected)
     throw InputError(file.string(), "size", std::to_string(actual),
                      fmt::format("expected {} bytes for its header: truncated or corrupt", expected));
   Film film(w, h, p.layers, p.color_space);
   if (p.bins > 0) film.enable_spectral(p.spectral_min, p.spectral_max, p.bins);
+  film.enable_aovs(p.aovs);
   auto get = [&](std::vector<double>& v) {
     if (!v.empty() && std::fread(v.data(), 8, v.size(), f.get()) != v.size())
       throw InputError(file.string(), "sums", "", "truncated file");
@@ -233,6 +245,7 @@ Film read_checkpoint(const std::filesystem::path& file, CheckpointHeader* header
   for (size_t l = 0; l < p.layers.size(); ++l) get(mutable_xyz(film, int(l)));
   for (size_t l = 0; l < p.layers.size(); ++l) get(mutable_rgb2(film, int(l)));
   get(mutable_spectral(film));
+  get(mutable_aovs(film));
   uint64_t stored = 0;
   if (std::fread(&stored, 8, 1, f.get()) != 1 || stored != p.checksum.h)
     throw InputError(file.string(), "checksum", fmt::format("{:016x}", stored), "does not match the contents: corrupt file");
@@ -244,7 +257,7 @@ void add_film_window(Film& full, const Film& part, const PixelWindow& window) {
   if (part.width() != window.width() || part.height() != window.height() || window.x0 < 0 || window.y0 < 0 ||
       window.x1 > full.width() || window.y1 > full.height() || part.layer_names() != full.layer_names() ||
       part.spectral_bins() != full.spectral_bins() || part.spectral_min_nm() != full.spectral_min_nm() ||
-      part.spectral_max_nm() != full.spectral_max_nm())
+      part.spectral_max_nm() != full.spectral_max_nm() || part.aovs() != full.aovs())
     throw std::invalid_argument(fmt::format("add_film_window: a {}x{} film with {} layers and {} bins does not fit window {} of a "
                                             "{}x{} film with {} layers and {} bins",
                                             part.width(), part.height(), part.layer_names().size(), part.spectral_bins(),
@@ -262,24 +275,21 @@ void add_film_window(Film& full, const Film& part, const PixelWindow& window) {
     add_rows(mutable_rgb2(full, int(l)), part.raw_rgb_squares(int(l)), 3);
   }
   if (full.spectral_bins() > 0) add_rows(mutable_spectral(full), part.raw_spectral(), size_t(full.spectral_bins()));
+  if (full.aovs()) add_rows(mutable_aovs(full), part.raw_aovs(), Film::kAovSums);
 }
 
-void set_raw_sums(Film& film, int layer, const std::vector<double>& sums) {
-  std::vector<double>& dst = mutable_xyz(film, layer);
-  if (sums.size() != dst.size()) throw std::invalid_argument("set_raw_sums: size mismatch");
+namespace {
+void overwrite(std::vector<double>& dst, const std::vector<double>& sums, const char* what) {
+  if (sums.size() != dst.size()) throw std::invalid_argument(fmt::format("{}: size mismatch", what));
   dst = sums;
 }
+}  // namespace
 
+void set_raw_sums(Film& film, int layer, const std::vector<double>& sums) { overwrite(mutable_xyz(film, layer), sums, "set_raw_sums"); }
 void set_raw_rgb_squares(Film& film, int layer, const std::vector<double>& sums) {
-  std::vector<double>& dst = mutable_rgb2(film, layer);
-  if (sums.size() != dst.size()) throw std::invalid_argument("set_raw_rgb_squares: size mismatch");
-  dst = sums;
+  overwrite(mutable_rgb2(film, layer), sums, "set_raw_rgb_squares");
 }
-
-void set_raw_spectral(Film& film, const std::vector<double>& sums) {
-  std::vector<double>& dst = mutable_spectral(film);
-  if (sums.size() != dst.size()) throw std::invalid_argument("set_raw_spectral: size mismatch");
-  dst = sums;
-}
+void set_raw_spectral(Film& film, const std::vector<double>& sums) { overwrite(mutable_spectral(film), sums, "set_raw_spectral"); }
+void set_raw_aovs(Film& film, const std::vector<double>& sums) { overwrite(mutable_aovs(film), sums, "set_raw_aovs"); }
 
 }  // namespace chlorovdb

@@ -4,10 +4,11 @@
 // renders can be merged without float rounding.
 //
 // File layout (little-endian), docs/distributed.md:
-//   "CHLVDBCK"  u32 format version (2)  u64 header length H
-//   H bytes of JSON header (CheckpointHeader, plus layers, spectral bins, colour space)
+//   "CHLVDBCK"  u32 format version (3; 2 is read too: no AOVs)  u64 header length H
+//   H bytes of JSON header (CheckpointHeader, plus layers, spectral bins, colour space, AOVs)
 //   f64 sums: each layer's (y·w + x)·3 + {X,Y,Z}, then each layer's sums of squared RGB
-//   (y·w + x)·3 + {R,G,B} (the standard-error layers), then (y·w + x)·bins + bin; w, h = the crop's size
+//   (y·w + x)·3 + {R,G,B} (the standard-error layers), then (y·w + x)·bins + bin, then
+//   with AOVs (y·w + x)·Film::kAovSums + i (Film::raw_aovs); w, h = the crop's size
 //   u64 checksum of everything before it
 // Written to "<file>.<pid>.tmp", flushed to disk and renamed over <file>: a crash
 // (even SIGKILL) leaves either the previous checkpoint or the new one, never a torn file.
@@ -52,5 +53,6 @@ void add_film_window(Film& full, const Film& part, const PixelWindow& window);
 void set_raw_sums(Film& film, int layer, const std::vector<double>& sums);
 void set_raw_rgb_squares(Film& film, int layer, const std::vector<double>& sums);
 void set_raw_spectral(Film& film, const std::vector<double>& sums);
+void set_raw_aovs(Film& film, const std::vector<double>& sums);
 
 }  // namespace chlorovdb

@@ -1,6 +1,7 @@
 #include "checkpoint/merge.h"
 
 #include <algorithm>
+#include <limits>
 #include <stdexcept>
 
 #include <fmt/format.h>
@@ -13,6 +14,9 @@
 namespace chlorovdb {
 
 namespace {
+
+// The depth AOV (film/film.h): Z, a mean over the samples that hit a surface, and their fraction.
+bool is_depth_layer(const ImageLayer& l) { return l.name == "depth" && l.channels == std::vector<std::string>{"Z", "coverage"}; }
 
 struct Part {
   std::filesystem::path file;
@@ -167,11 +171,19 @@ Image merge_exrs(const std::vector<std::filesystem::path>& files, MergeSummary* 
       if (mean && mean->pixels.size() != src.pixels.size()) mean = nullptr;
       if (is_stderr_layer(src.name) && !mean)
         throw InputError(p.file.string(), "layer", src.name, "a standard-error layer without its mean layer");
+      const bool depth_with_coverage = is_depth_layer(src);
       for (int y = 0; y < c.height(); ++y)
         for (int x = 0; x < c.width(); ++x) {
           const size_t at = (size_t(y) * c.width() + x) * nc;
           const float* s = &src.pixels[at];
           double* d = &acc[l][(size_t(c.y0 + y) * W + size_t(c.x0 + x)) * nc];
+          if (depth_with_coverage) {
+            // Z is the mean over the samples that hit a surface: weight it by their number, not by spp.
+            const double hits = weight * double(s[1]);
+            d[0] += hits > 0 ? hits * double(s[0]) : 0.0;
+            d[1] += hits;
+            continue;
+          }
           for (size_t k = 0; k < nc; ++k) d[k] += mean ? sum_of_squares(mean->pixels[at + k], s[k], weight) : weight * double(s[k]);
         }
     }
@@ -185,6 +197,13 @@ Image merge_exrs(const std::vector<std::filesystem::path>& files, MergeSummary* 
   for (size_t l = 0; l < out.layers.size(); ++l) {
     out.layers[l].pixels.resize(acc[l].size());
     if (is_stderr_layer(out.layers[l].name)) continue;
+    if (is_depth_layer(out.layers[l])) {
+      for (size_t i = 0; i < acc[l].size(); i += 2) {
+        out.layers[l].pixels[i] = acc[l][i + 1] > 0 ? float(acc[l][i] / acc[l][i + 1]) : std::numeric_limits<float>::infinity();
+        out.layers[l].pixels[i + 1] = float(acc[l][i + 1] / double(total));
+      }
+      continue;
+    }
     for (size_t i = 0; i < acc[l].size(); ++i) out.layers[l].pixels[i] = float(acc[l][i] / double(total));
   }
   for (size_t l = 0; l < out.layers.size(); ++l) {
@@ -219,6 +238,7 @@ Image merge_checkpoints(const std::vector<std::filesystem::path>& files, MergeSu
       first = h;
       full.emplace(W, H, film.layer_names(), film.color_space());
       if (film.spectral_bins() > 0) full->enable_spectral(film.spectral_min_nm(), film.spectral_max_nm(), film.spectral_bins());
+      full->enable_aovs(film.aovs());
     }
     if (film.color_space() != full->color_space())
       throw InputError(p.file.string(), "color_space", "", fmt::format("differs from {}", parts.front().file.string()));

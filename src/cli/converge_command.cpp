@@ -30,7 +30,7 @@ struct ConvergeArgs {
   std::string clock = "wall";
   std::optional<int> threads, wavelengths;
   std::optional<uint64_t> seed;
-  std::optional<std::string> resolution, fluorescence, transmittance;
+  std::optional<std::string> resolution, fluorescence, transmittance, aovs;
   std::vector<std::string> sets;
   std::string label;
   std::filesystem::path output;  // prefix: PREFIX.csv, PREFIX.svg

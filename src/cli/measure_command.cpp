@@ -23,7 +23,7 @@ struct MeasureArgs {
   MeasureOptions options;
   std::optional<int> wavelengths;
   std::optional<uint64_t> seed;
-  std::optional<std::string> resolution, fluorescence, transmittance;
+  std::optional<std::string> resolution, fluorescence, transmittance, aovs;
   std::vector<std::string> sets;
   std::filesystem::path csv;
 };

@@ -26,7 +26,7 @@ struct ReferenceArgs {
   bool resume = false;
   std::optional<int> threads, wavelengths;
   std::optional<uint64_t> seed;
-  std::optional<std::string> resolution, fluorescence, transmittance;
+  std::optional<std::string> resolution, fluorescence, transmittance, aovs;
   std::vector<std::string> sets;
   bool quiet = false;
 };

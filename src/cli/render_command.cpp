@@ -44,7 +44,7 @@ struct RenderArgs {
   std::optional<uint64_t> seed;
   std::optional<std::string> resolution;  // "WxH"
   std::optional<float> exposure;
-  std::optional<std::string> fluorescence, transmittance;
+  std::optional<std::string> fluorescence, transmittance, aovs;
   std::optional<std::string> crop, sample_range;  // "x0,y0,x1,y1", "A:B"
   std::vector<std::string> sets;                  // --set KEY=VALUE
   std::filesystem::path checkpoint;

@@ -1,6 +1,6 @@
 #pragma once
 // The scene options that render, reference, converge and measure share
-// (--seed, --resolution, --wavelengths, --fluorescence, --transmittance, --set):
+// (--seed, --resolution, --wavelengths, --fluorescence, --transmittance, --aovs, --set):
 // one place defines them and turns them into SceneOverrides.
 #include <CLI/CLI.hpp>
 
@@ -17,6 +17,8 @@ void add_scene_options(CLI::App* sub, Args& r) {
   sub->add_option("--wavelengths", r.wavelengths, "Wavelengths per camera path")->check(Integer(1, kMaxWavelengths));
   sub->add_option("--fluorescence", r.fluorescence, "auto | direct | full | reference | off");
   sub->add_option("--transmittance", r.transmittance, "auto | ratio | residual_ratio | delta");
+  sub->add_option("--aovs", r.aovs,
+                  "Compositing layers, comma-separated: alpha,depth,normal,albedo (replaces render.aovs; \"\" for none)");
   sub->add_option("--set", r.sets,
                   "KEY=VALUE: change any scene key in memory, e.g. media.solution.pigments[0].concentration=5 (repeatable)");
 }
@@ -28,6 +30,7 @@ SceneOverrides scene_overrides(const Args& a) {
   o.wavelengths = a.wavelengths;
   o.fluorescence = a.fluorescence;
   o.transmittance = a.transmittance;
+  o.aovs = a.aovs;
   if (a.resolution) parse_resolution(*a.resolution, o);
   return o;
 }

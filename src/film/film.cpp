@@ -4,12 +4,17 @@
 
 #include <fmt/format.h>
 
+#include <fmt/ranges.h>
+
 #include <algorithm>
+#include <bit>
 #include <cassert>
+#include <limits>
 #include <cmath>
 #include <stdexcept>
 
 #include "spectra/color.h"
+#include "spectra/library.h"
 
 namespace chlorovdb {
 
@@ -26,6 +31,8 @@ std::string spectral_channel_name(float lambda_nm) {
 RGB (*rgb_conversion(ColorSpace c))(const XYZ&) { return c == ColorSpace::sRGB ? xyz_to_linear_srgb : xyz_to_acescg; }
 
 constexpr std::string_view kStderrSuffix = "_stderr";
+// EXR layers of the AOVs, in bit order.
+constexpr std::string_view kAovLayers[] = {"alpha", "depth", "N", "albedo"};
 
 void put_rgb(ImageLayer& layer, size_t pixel, const RGB& rgb) {
   layer.pixels[pixel * 3 + 0] = float(rgb.r);
@@ -34,6 +41,35 @@ void put_rgb(ImageLayer& layer, size_t pixel, const RGB& rgb) {
 }
 
 }  // namespace
+
+const std::vector<std::string>& aov_names() {
+  static const std::vector<std::string> names{"alpha", "depth", "normal", "albedo"};
+  return names;
+}
+
+std::vector<std::string> aov_list(AovMask mask) {
+  std::vector<std::string> out;
+  for (size_t b = 0; b < aov_names().size(); ++b)
+    if (mask & (1u << b)) out.push_back(aov_names()[b]);
+  return out;
+}
+
+AovMask aov_mask(const std::vector<std::string>& names, std::string* unknown) {
+  AovMask mask = 0;
+  for (const std::string& n : names) {
+    const auto it = std::find(aov_names().begin(), aov_names().end(), n);
+    if (it == aov_names().end()) {
+      *unknown = n;
+      return 0;
+    }
+    mask |= 1u << unsigned(it - aov_names().begin());
+  }
+  return mask;
+}
+
+bool is_aov_layer(std::string_view name) {
+  return std::find(std::begin(kAovLayers), std::end(kAovLayers), name) != std::end(kAovLayers);
+}
 
 std::string stderr_layer_name(std::string_view layer) { return std::string(layer) + std::string(kStderrSuffix); }
 
@@ -72,6 +108,9 @@ Film::Film(Film&& o) noexcept
       spectral_max_nm_(o.spectral_max_nm_),
       spectral_bins_(o.spectral_bins_),
       spectral_(std::move(o.spectral_)),
+      aovs_(o.aovs_),
+      aov_(std::move(o.aov_)),
+      d65_(std::move(o.d65_)),
       nonfinite_(o.nonfinite_samples()) {}
 
 Film& Film::operator=(Film&& o) noexcept {
@@ -85,6 +124,9 @@ Film& Film::operator=(Film&& o) noexcept {
   spectral_max_nm_ = o.spectral_max_nm_;
   spectral_bins_ = o.spectral_bins_;
   spectral_ = std::move(o.spectral_);
+  aovs_ = o.aovs_;
+  aov_ = std::move(o.aov_);
+  d65_ = std::move(o.d65_);
   nonfinite_.store(o.nonfinite_samples(), std::memory_order_relaxed);
   return *this;
 }
@@ -101,17 +143,53 @@ void Film::enable_spectral(float lambda_min_nm, float lambda_max_nm, int bins) {
   spectral_.assign(size_t(width_) * size_t(height_) * size_t(bins), 0.0);
 }
 
+void Film::enable_aovs(AovMask mask) {
+  aovs_ = mask;
+  if (!mask) {
+    aov_.clear();
+    return;
+  }
+  check_memory(2.0 * width_ * height_ * kAovSums * sizeof(double), "the AOV sums", "film", "aovs",
+               fmt::format("{}", fmt::join(aov_list(mask), ",")));
+  aov_.assign(size_t(width_) * size_t(height_) * kAovSums, 0.0);
+  const Spectrum d65 = named_spectrum("D65");
+  d65_ = d65.scaled(1.f / luminance(d65));
+}
+
+Film Film::empty_like() const {
+  Film f(width_, height_, layer_names_, color_space_);
+  if (spectral_bins_ > 0) f.enable_spectral(spectral_min_nm_, spectral_max_nm_, spectral_bins_);
+  f.enable_aovs(aovs_);
+  return f;
+}
+
 void Film::add_sample(int x, int y, int layer, const SampledSpectrum& L, const SampledWavelengths& lambda) {
   assert(x >= 0 && x < width_ && y >= 0 && y < height_ && layer >= 0 && layer < int(xyz_.size()));
   add_layer_sample(size_t(y) * size_t(width_) + size_t(x), layer, L, lambda, xyz_lane_weights(lambda));
 }
 
-void Film::add_sample(int x, int y, std::span<const SampledSpectrum> layers, const SampledWavelengths& lambda) {
-  assert(x >= 0 && x < width_ && y >= 0 && y < height_ && layers.size() == xyz_.size());
+void Film::add_sample(int x, int y, std::span<const SampledSpectrum> layers, const SampledWavelengths& lambda,
+                      const AovSample* aov) {
+  assert(x >= 0 && x < width_ && y >= 0 && y < height_ && layers.size() == xyz_.size() && (aov || !aovs_));
   const XyzLaneWeights w = xyz_lane_weights(lambda);
   const size_t pixel = size_t(y) * size_t(width_) + size_t(x);
   for (size_t l = 0; l < layers.size(); ++l)
     if (!layers[l].is_black() || layers[l].has_nonfinite()) add_layer_sample(pixel, int(l), layers[l], lambda, w);
+  if (!aovs_ || !aov) return;
+  // Y of (1 - T), not 1 - Y of T: the hero-wavelength weights sum to 1 only on average, and this way a ray
+  // through vacuum has alpha 0 exactly (the estimator is unbiased either way).
+  const double alpha = aov->surface ? 1.0 : to_xyz(SampledSpectrum(1.f) - aov->transmittance, w).y;
+  const RGB albedo = rgb_conversion(color_space_)(to_xyz(aov->albedo * d65_.sample(lambda), w));
+  const double v[kAovSums] = {alpha,           aov->surface ? aov->depth : 0.0, aov->surface ? 1.0 : 0.0,
+                              aov->normal.x,   aov->normal.y,                   aov->normal.z,
+                              albedo.r,        albedo.g,                        albedo.b};
+  for (double e : v)
+    if (!std::isfinite(e)) {
+      nonfinite_.fetch_add(1, std::memory_order_relaxed);
+      return;
+    }
+  double* sum = &aov_[pixel * kAovSums];
+  for (size_t i = 0; i < kAovSums; ++i) sum[i] += v[i];
 }
 
 void Film::add_layer_sample(size_t pixel, int layer, const SampledSpectrum& L, const SampledWavelengths& lambda,
@@ -182,6 +260,22 @@ Image Film::to_image(double samples_per_pixel) const {
     for (size_t p = 0; p < pixel_count; ++p) put_rgb(layer, p, pixel_standard_error(int(l), p, samples_per_pixel));
     image.layers.push_back(std::move(layer));
   }
+  const auto aov_layer = [&](AovBit bit, std::vector<std::string> channels, auto&& value) {
+    if (!(aovs_ & bit)) return;
+    ImageLayer layer{std::string(kAovLayers[std::countr_zero(unsigned(bit))]), std::move(channels), {}};
+    layer.pixels.resize(pixel_count * layer.channels.size());
+    for (size_t p = 0; p < pixel_count; ++p)
+      for (size_t c = 0; c < layer.channels.size(); ++c)
+        layer.pixels[p * layer.channels.size() + c] = float(value(&aov_[p * kAovSums], c));
+    image.layers.push_back(std::move(layer));
+  };
+  aov_layer(kAovAlpha, {"A"}, [&](const double* a, size_t) { return a[0] * inv_spp; });
+  aov_layer(kAovDepth, {"Z", "coverage"}, [&](const double* a, size_t c) {
+    return c == 0 ? (a[2] > 0 ? a[1] / a[2] : std::numeric_limits<double>::infinity()) : a[2] * inv_spp;
+  });
+  aov_layer(kAovNormal, {"X", "Y", "Z"}, [&](const double* a, size_t c) { return a[3 + c] * inv_spp; });
+  aov_layer(kAovAlbedo, {"R", "G", "B"}, [&](const double* a, size_t c) { return a[6 + c] * inv_spp; });
+  if (aovs_) image.metadata.set("aovs", fmt::format("{}", fmt::join(aov_list(aovs_), ",")));
   image.metadata.set("color_space", color_space_ == ColorSpace::sRGB ? std::string("linear sRGB (D65)")
                                                                       : std::string("ACEScg (AP1, Bradford-adapted from D65)"));
   image.metadata.set("samples_per_pixel", samples_per_pixel);
@@ -191,7 +285,8 @@ Image Film::to_image(double samples_per_pixel) const {
 
 void Film::merge(const Film& other) {
   if (other.width_ != width_ || other.height_ != height_ || other.layer_names_ != layer_names_ ||
-      other.spectral_bins_ != spectral_bins_ || other.spectral_min_nm_ != spectral_min_nm_ || other.spectral_max_nm_ != spectral_max_nm_)
+      other.spectral_bins_ != spectral_bins_ || other.spectral_min_nm_ != spectral_min_nm_ || other.spectral_max_nm_ != spectral_max_nm_ ||
+      other.aovs_ != aovs_)
     throw std::invalid_argument(fmt::format("Film::merge: films differ ({}x{}, {} layers, {} bins vs {}x{}, {} layers, {} bins)", width_,
                                             height_, layer_names_.size(), spectral_bins_, other.width_, other.height_,
                                             other.layer_names_.size(), other.spectral_bins_));
@@ -201,6 +296,7 @@ void Film::merge(const Film& other) {
       rgb2_[l][i] += other.rgb2_[l][i];
     }
   for (size_t i = 0; i < spectral_.size(); ++i) spectral_[i] += other.spectral_[i];
+  for (size_t i = 0; i < aov_.size(); ++i) aov_[i] += other.aov_[i];
   nonfinite_.fetch_add(other.nonfinite_samples(), std::memory_order_relaxed);
 }
 

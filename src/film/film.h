@@ -18,6 +18,16 @@
 // mean of n samples is then sqrt((Σx² − n·mean²) / (n (n − 1))), written as a
 // layer "<layer>_stderr" beside each layer. Moments (not batch means) because
 // they add exactly under merge, checkpoint and resume and need no batch size.
+//
+// Compositing layers (AOVs, opt-in: render.aovs / --aovs): first-hit quantities of
+// each camera sample (integrator/aov.h defines them), summed per pixel like the
+// radiance, so they are box-filtered means over the pixel's samples and edges
+// antialias: "alpha" (A) = 1 − the ȳ-weighted transmittance to the background, 1 on
+// a visible surface; "depth" (Z, coverage) = the mean camera-ray distance to the
+// first visible surface over the samples that hit one (+inf where none did) and the
+// fraction that did; "N" (X, Y, Z) = the world-space shading normal facing the camera
+// (0 for samples that hit nothing, so edges shorten it); "albedo" (R, G, B) = the
+// denoiser albedo, reflectance under D65 in the output colour space (white = 1).
 #include <atomic>
 #include <cstdint>
 #include <span>
@@ -25,6 +35,7 @@
 #include <string_view>
 #include <vector>
 
+#include "core/vec.h"
 #include "io/image.h"
 #include "spectra/color.h"
 #include "spectra/sampled.h"
@@ -47,6 +58,26 @@ inline double sum_of_squares(double mean, double se, double n) { return n * (n -
 // The mean layer a standard-error layer belongs to ("total_stderr" -> "total").
 std::string_view stderr_base_name(std::string_view stderr_layer);
 
+// Compositing layers, a bit each (render.aovs).
+enum AovBit : unsigned { kAovAlpha = 1, kAovDepth = 2, kAovNormal = 4, kAovAlbedo = 8 };
+using AovMask = unsigned;
+// The scene-file names, in bit order: "alpha", "depth", "normal", "albedo".
+const std::vector<std::string>& aov_names();
+std::vector<std::string> aov_list(AovMask mask);  // the names of the set bits
+// The mask of `names`; the first name that is not an AOV goes to *unknown (mask then 0).
+AovMask aov_mask(const std::vector<std::string>& names, std::string* unknown);
+// The EXR layers the AOVs write ("alpha", "depth", "N", "albedo"): means, no standard error.
+bool is_aov_layer(std::string_view name);
+
+// One camera sample's first-hit quantities (integrator/aov.h fills them).
+struct AovSample {
+  bool surface = false;                // the camera ray reached a visible surface
+  float depth = 0;                     // its distance along the camera ray, metres
+  Vec3 normal{0, 0, 0};                // its world-space shading normal, facing the camera
+  SampledSpectrum transmittance{1.f};  // to the background, when !surface (alpha = 1 - its Y)
+  SampledSpectrum albedo{0.f};         // reflectance of the first non-specular surface
+};
+
 class Film {
  public:
   Film(int width, int height, std::vector<std::string> layer_names, ColorSpace color_space);
@@ -63,6 +94,11 @@ class Film {
 
   // Bins of equal width over [lambda_min, lambda_max) nm for the beauty layer.
   void enable_spectral(float lambda_min_nm, float lambda_max_nm, int bins);
+  // Sums for the compositing layers in `mask` (all kAovSums per pixel when any is set).
+  void enable_aovs(AovMask mask);
+  AovMask aovs() const { return aovs_; }
+  // A film of the same size, layers, colour space, bins and AOVs, all sums zero.
+  Film empty_like() const;
 
   // Thread-safe for distinct pixels (tiles are disjoint), so pixels need no atomics.
   // A sample with a non-finite value in any lane, or a non-finite estimate, is
@@ -70,7 +106,9 @@ class Film {
   void add_sample(int x, int y, int layer, const SampledSpectrum& L, const SampledWavelengths& lambda);
   // One sample of every layer at once (layers[l] for layer l): the colour-matching
   // functions are looked up once, and black layers cost nothing.
-  void add_sample(int x, int y, std::span<const SampledSpectrum> layers, const SampledWavelengths& lambda);
+  // `aov` (required when AOVs are enabled) adds the sample's first-hit quantities.
+  void add_sample(int x, int y, std::span<const SampledSpectrum> layers, const SampledWavelengths& lambda,
+                  const AovSample* aov = nullptr);
   uint64_t nonfinite_samples() const { return nonfinite_.load(std::memory_order_relaxed); }
 
   // Mean over `samples_per_pixel` samples: one RGB layer per layer name (channels
@@ -90,8 +128,12 @@ class Film {
   const std::vector<double>& raw_spectral() const { return spectral_; }
   // Sums of squares of each sample's RGB (output colour space): (y·width + x)·3 + {R, G, B}.
   const std::vector<double>& raw_rgb_squares(int layer) const { return rgb2_[size_t(layer)]; }
+  // AOV sums, (y·width + x)·kAovSums + {alpha, depth, hits, N.x, N.y, N.z, albedo R, G, B}
+  // (depth summed over the samples that hit a surface, `hits` of them); empty without AOVs.
+  static constexpr size_t kAovSums = 9;
+  const std::vector<double>& raw_aovs() const { return aov_; }
   // Adds another film's sums and non-finite count; throws std::invalid_argument
-  // unless size, layers and spectral bins agree.
+  // unless size, layers, spectral bins and AOVs agree.
   void merge(const Film& other);
 
  private:
@@ -105,6 +147,9 @@ class Film {
   float spectral_min_nm_ = 0.f, spectral_max_nm_ = 0.f;
   int spectral_bins_ = 0;
   std::vector<double> spectral_;
+  AovMask aovs_ = 0;
+  std::vector<double> aov_;
+  Spectrum d65_;  // the albedo's illuminant, normalised to Y = 1 (set by enable_aovs)
   std::atomic<uint64_t> nonfinite_{0};
 };
 

@@ -10,6 +10,7 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include "integrator/aov.h"
 #include "io/progress.h"
 
 namespace chlorovdb {
@@ -35,6 +36,7 @@ std::vector<Tile> make_tiles(int x0, int y0, int x1, int y1) {
 void render_tile(const Scene& scene, Film& film, int fx0, int fy0, const Tile& tile, int s0, int s1, uint64_t seed,
                  PathStats& stats) {
   const int n_lambda = scene.settings.wavelengths;
+  const AovMask aovs = film.aovs();
   for (int y = tile.y0; y < tile.y1; ++y)
     for (int x = tile.x0; x < tile.x1; ++x)
       for (int s = s0; s < s1; ++s) {
@@ -45,7 +47,14 @@ void render_tile(const Scene& scene, Film& film, int fx0, int fy0, const Tile& t
         const PathRadiance L = trace_path(scene, ray, scene.camera_medium, lambda, rng, stats);
         const SampledSpectrum layers[] = {L.fluorescence + L.other, L.fluorescence, L.other};
         static_assert(kLayerTotal == 0 && kLayerFluorescence == 1 && kLayerNonFluorescence == 2);
-        film.add_sample(x - fx0, y - fy0, layers, lambda);
+        if (!aovs) {
+          film.add_sample(x - fx0, y - fy0, layers, lambda);
+          continue;
+        }
+        // The same camera ray and wavelengths; a stream of its own, so the image is the same with or without AOVs.
+        Rng aov_rng = sample_rng(~seed, x, y, s);
+        const AovSample aov = trace_aovs(scene, ray, scene.camera_medium, lambda, aov_rng, aovs);
+        film.add_sample(x - fx0, y - fy0, layers, lambda, &aov);
       }
 }
 
@@ -77,7 +86,6 @@ RenderStats render(const Scene& scene, Film& film, const RenderOptions& options)
   const std::vector<Tile> tiles = make_tiles(fx0, fy0, fx0 + film.width(), fy0 + film.height());
   tbb::enumerable_thread_specific<PathStats> stats;
   tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
-  const bool spectral = film.spectral_bins() > 0;
   std::unique_ptr<Progress> progress;
   if (options.show_progress) progress = std::make_unique<Progress>(int64_t(tiles.size()) * (options.spp - options.samples_done), "render");
 
@@ -88,8 +96,7 @@ RenderStats render(const Scene& scene, Film& film, const RenderOptions& options)
     const int s0 = options.first_sample + done;
     // Each pass renders into its own film, merged only when complete, so an
     // interrupted pass never leaves pixels with fewer samples than the others.
-    Film pass(film.width(), film.height(), film.layer_names(), film.color_space());
-    if (spectral) pass.enable_spectral(film.spectral_min_nm(), film.spectral_max_nm(), film.spectral_bins());
+    Film pass = film.empty_like();
     std::atomic<bool> pass_complete{true};
     arena.execute([&] {
       tbb::parallel_for(tbb::blocked_range<size_t>(0, tiles.size(), 1), [&](const tbb::blocked_range<size_t>& r) {

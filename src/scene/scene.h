@@ -47,6 +47,7 @@ struct RenderSettings {
   bool fluorescence_auto = true;  // `auto` in the scene: direct where exact, full otherwise
   std::string fluorescence_reason;  // why auto chose what it chose (reported to the user)
   int spectral_bins = 0;
+  AovMask aovs = 0;  // compositing layers (film/film.h, integrator/aov.h)
   // Skip work a scene does not need (absorbing-only media tracked by
   // transmittance, non-fluorescent pigments, lights dark in an excitation band,
   // paths carrying no emission wavelength). Off only to measure each skip.

@@ -1,6 +1,7 @@
 #include "scene/scene_loader.h"
 
 #include <cmath>
+#include <functional>
 #include <map>
 
 #include <fmt/format.h>
@@ -56,6 +57,18 @@ void check_choice(const std::string& flag, const std::string& value, const std::
                                near.empty() ? "" : fmt::format(" (did you mean \"{}\"?)", near)));
 }
 
+// `names` as an AOV mask; an unknown name is an error about `key` naming it and the nearest AOV.
+AovMask read_aov_names(const std::vector<std::string>& names, const std::function<void(const std::string&)>& fail) {
+  std::string unknown;
+  const AovMask mask = aov_mask(names, &unknown);
+  if (!unknown.empty()) {
+    const std::string near = nearest_word(unknown, aov_names());
+    fail(fmt::format("\"{}\" is not an AOV: expected any of {}{}", unknown, fmt::join(aov_names(), ", "),
+                     near.empty() ? "" : fmt::format(" (did you mean \"{}\"?)", near)));
+  }
+  return mask;
+}
+
 RenderSettings read_render_settings(ParamReader& top, const SceneOverrides& o, std::string* fluorescence,
                                     std::string* transmittance) {
   RenderSettings s;
@@ -76,6 +89,14 @@ RenderSettings read_render_settings(ParamReader& top, const SceneOverrides& o, s
     *transmittance = r->get_enum("transmittance", "auto", kEstimators);
     *fluorescence = r->get_enum("fluorescence", "auto", kFluorescenceModes);
     s.spectral_bins = r->get_int("spectral_bins", 0, 0, 4096);
+    if (r->has("aovs")) {
+      const nlohmann::json& v = r->raw("aovs");
+      std::vector<std::string> names;
+      if (v.is_array())
+        for (const auto& e : v) names.push_back(e.is_string() ? e.get<std::string>() : e.dump());
+      if (!v.is_array()) r->fail("aovs", fmt::format("expected an array of names, any of {}", fmt::join(aov_names(), ", ")));
+      s.aovs = read_aov_names(names, [&](const std::string& problem) { r->fail("aovs", problem); });
+    }
     s.skip_unneeded_work = r->get_bool("skip_unneeded_work", true);
     const std::string glass = r->get_enum("excitation_through_glass", "fresnel", {"fresnel", "block", "connect"});
     s.excitation_through_glass = glass == "fresnel";
@@ -93,7 +114,7 @@ RenderSettings read_render_settings(ParamReader& top, const SceneOverrides& o, s
   }
   // Film: 3 layers × XYZ doubles plus the spectral bins, twice (a per-pass film).
   const auto refuse_huge_film = [&](int w, int h) {
-    check_memory(2.0 * w * h * (3 * 3 + s.spectral_bins) * 8.0, "the image (resolution and spectral bins)",
+    check_memory(2.0 * w * h * (3 * 3 + s.spectral_bins + (s.aovs ? Film::kAovSums : 0)) * 8.0, "the image (resolution and spectral bins)",
                  top.file().string(), "render.resolution", fmt::format("[{}, {}]", w, h));
   };
   if (o.width) s.width = *o.width;
@@ -103,6 +124,15 @@ RenderSettings read_render_settings(ParamReader& top, const SceneOverrides& o, s
   if (o.seed) s.seed = *o.seed;
   if (o.transmittance) check_choice("--transmittance", *transmittance = *o.transmittance, kEstimators);
   if (o.fluorescence) check_choice("--fluorescence", *fluorescence = *o.fluorescence, kFluorescenceModes);
+  if (o.aovs) {
+    std::vector<std::string> names;
+    for (size_t start = 0; start < o.aovs->size();) {
+      const size_t comma = std::min(o.aovs->find(',', start), o.aovs->size());
+      if (comma > start) names.push_back(o.aovs->substr(start, comma - start));
+      start = comma + 1;
+    }
+    s.aovs = read_aov_names(names, [&](const std::string& problem) { throw InputError("command line", "--aovs", *o.aovs, problem); });
+  }
   refuse_huge_film(s.width, s.height);
   s.transmittance_auto = *transmittance == "auto";
   if (!s.transmittance_auto) s.transmittance = *transmittance_estimator_from_string(*transmittance);

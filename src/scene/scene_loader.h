@@ -18,6 +18,7 @@ struct SceneOverrides {
   std::optional<int> width, height, spp, wavelengths;
   std::optional<uint64_t> seed;
   std::optional<std::string> fluorescence, transmittance;
+  std::optional<std::string> aovs;  // "alpha,depth,normal,albedo" (any of them; "" for none)
 };
 
 Scene load_scene(const std::filesystem::path& file, const SceneOverrides& overrides = {});

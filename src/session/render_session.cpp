@@ -18,7 +18,7 @@ int job_bins(const Scene& scene, const RenderJob& job) { return job.spectral_bin
 // Every setting that changes the image: parts and checkpoints must agree on all of them.
 Signature make_signature(const Scene& scene, const RenderJob& job) {
   const RenderSettings& s = scene.settings;
-  return {
+  Signature sig{
       {"scene_hash", job.scene_hash},
       {"seed", std::to_string(job_seed(scene, job))},
       {"wavelengths", std::to_string(s.wavelengths)},
@@ -28,6 +28,9 @@ Signature make_signature(const Scene& scene, const RenderJob& job) {
       {"color_space", job_color_space(scene, job) == ColorSpace::sRGB ? "sRGB" : "ACEScg"},
       {"spectral_bins", std::to_string(job_bins(scene, job))},
   };
+  // Only when asked for, so renders without AOVs keep matching older checkpoints and parts.
+  if (s.aovs) sig.emplace_back("aovs", fmt::format("{}", fmt::join(aov_list(s.aovs), ",")));
+  return sig;
 }
 
 // Refuses a checkpoint that another scene, seed, size, crop or range produced.
@@ -50,7 +53,7 @@ void check_resumable(const std::filesystem::path& file, const CheckpointHeader& 
                                  d->key, d->b, d->key == "scene_hash" ? " (the scene file or its --set edits changed)" : "",
                                  hint));
   if (saved.layer_names() != film.layer_names() || saved.spectral_bins() != film.spectral_bins() ||
-      saved.color_space() != film.color_space())
+      saved.color_space() != film.color_space() || saved.aovs() != film.aovs())
     throw InputError(f, "layers", "", fmt::format("the checkpoint's film layers differ from this build's: {}", hint));
   if (h.samples_done > range.size())
     throw InputError(f, "samples_done", std::to_string(h.samples_done),
@@ -75,6 +78,11 @@ void reduce_over_ranks(const RankGroup& g, const SampleRange& range, int done_he
     std::vector<double> v = o.film.raw_spectral();
     g.sum_to_root(v);
     if (g.rank == 0) set_raw_spectral(o.film, v);
+  }
+  if (o.film.aovs()) {
+    std::vector<double> v = o.film.raw_aovs();
+    g.sum_to_root(v);
+    if (g.rank == 0) set_raw_aovs(o.film, v);
   }
   // One slot per rank for what is gathered or maximised, then the sums (exact in doubles below 2^53).
   const size_t n = size_t(g.size);
@@ -133,6 +141,7 @@ RenderOutcome run_render_session(const Scene& scene, const RenderJob& job) {
   o.rank = g.rank;
   o.ranks = g.size;
   if (job_bins(scene, job) > 0) o.film.enable_spectral(kLambdaMin, kLambdaMax, job_bins(scene, job));
+  o.film.enable_aovs(s.aovs);
 
   o.checkpoint = job.checkpoint;
   if (!o.checkpoint.empty() && g.size > 1) o.checkpoint += fmt::format(".rank{}of{}", g.rank, g.size);
