@@ -210,6 +210,25 @@ class ChlorovdbTest(unittest.TestCase):
         resumed = chlorovdb.render(scene, spp=report["spp"] + 1, threads=1, seed=5, checkpoint=ckpt, resume=True)
         self.assertEqual(resumed.metadata["resumed_at_spp"], report["spp"])
 
+    def test_aovs_are_returned_as_arrays(self):
+        scene = chlorovdb.load(self.write_scene("aovs", DYE_SCENE), set={"render.aovs": ["alpha", "depth", "normal", "albedo"]})
+        result = chlorovdb.render(scene, spp=2, threads=1, seed=3)
+        self.assertEqual(result["alpha"].shape, (6, 8, 1))
+        self.assertEqual(result["depth"].shape, (6, 8, 2))  # Z, coverage
+        self.assertEqual(result["N"].shape, (6, 8, 3))
+        self.assertEqual(result["albedo"].shape, (6, 8, 3))
+        self.assertEqual(result.metadata["aovs"], "alpha,depth,normal,albedo")
+        # Pixels wholly on the floor (seen directly or through the dye's interface sphere) are opaque;
+        # the sky above it, where no sample hits a surface, has no depth.
+        coverage = result["depth"][..., 1]
+        self.assertTrue(np.any(coverage == 1) and np.any(coverage == 0))
+        np.testing.assert_array_equal(result["alpha"][coverage == 1], 1.0)
+        self.assertTrue(np.all(np.isfinite(result["depth"][..., 0][coverage > 0])))
+        self.assertTrue(np.all(np.isinf(result["depth"][..., 0][coverage == 0])))
+        self.assertNotIn("alpha", chlorovdb.render(chlorovdb.load(self.write_scene("plain", DYE_SCENE)), spp=1).layers)
+        with self.assertRaises(chlorovdb.InputError):
+            chlorovdb.load(self.write_scene("bad_aovs", DYE_SCENE), set={"render.aovs": ["alfa"]})
+
     def test_render_layers_are_float32_hxwx3_and_add_up(self):
         scene = chlorovdb.load_scene(self.write_scene("dye", DYE_SCENE))
         result = chlorovdb.render(scene, spp=4, threads=1, seed=3)
