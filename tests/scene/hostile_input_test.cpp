@@ -217,3 +217,14 @@ TEST(HostileScene, SensorRegionsMustBeWholePixelsInsideTheImage) {
   expect_error(sensors(R"({"glow": {}})"), {"sensors.glow.region"});
   expect_error(sensors(R"([1, 2])"), {"sensors", "object"});
 }
+
+TEST(HostileScene, AovsMustBeKnownNames) {
+  const std::string cam = R"({"position": [0, 1, 5], "look_at": [0, 0, 0]})";
+  const Scene ok = load_scene(write("aovs.json", scene(cam, R"({"resolution": [8, 8], "spp": 1, "aovs": ["depth", "alpha"]})")));
+  EXPECT_EQ(ok.settings.aovs, AovMask(kAovDepth | kAovAlpha));
+  EXPECT_EQ(load_scene(write("no_aovs.json", scene())).settings.aovs, 0u);
+  expect_error(scene(cam, R"({"resolution": [8, 8], "aovs": ["alpha", "nromal"]})"),
+               {"render.aovs", "\"nromal\" is not an AOV", "did you mean \"normal\""});
+  expect_error(scene(cam, R"({"resolution": [8, 8], "aovs": "alpha"})"), {"render.aovs", "expected an array"});
+  expect_error(scene(cam, R"({"resolution": [8, 8], "aovs": [3]})"), {"render.aovs", "\"3\" is not an AOV"});
+}
