@@ -235,7 +235,8 @@ TEST(ReferenceCli, InterruptedReferenceResumesToTheUninterruptedOne) {
   const TestDir dir;
   auto args = [&](const std::string& name, std::vector<std::string> extra) {
     std::vector<std::string> a = {kExe, "reference", scene_file(), "-o", (dir / name).string(), "--spp", "400", "--resolution", "32x24",
-                                  "--wavelengths", "4", "--seed", "3", "--threads", "2", "--checkpoint-every", "0", "-q"};
+                                  "--wavelengths", "4", "--seed", "3", "--threads", "2", "--checkpoint-every", "0", "-q",
+                                  "--aovs", "alpha,depth,normal,albedo"};  // the compositing layers resume too
     a.insert(a.end(), extra.begin(), extra.end());
     return a;
   };
@@ -244,6 +245,7 @@ TEST(ReferenceCli, InterruptedReferenceResumesToTheUninterruptedOne) {
   ::kill(c.pid, SIGINT);
   EXPECT_EQ(wait_for(c), 130) << read_text(dir / "int.log");
   const Image partial = read_exr(dir / "int.exr");
+  ASSERT_NE(partial.find_layer("albedo"), nullptr);
   const int done = metadata_int(partial, "spp_done");
   EXPECT_GT(done, 0);
   EXPECT_LT(done, 400);
