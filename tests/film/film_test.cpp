@@ -207,3 +207,41 @@ TEST(Film, StandardErrorHelpersInvertEachOther) {
   EXPECT_NEAR(standard_error(mean, sum_of_squares(mean, se, n), n), se, 1e-12);
   EXPECT_EQ(standard_error(mean, 1.0, 1), 0.0);
 }
+
+TEST(Film, AovLayersAreMeansOverTheSamplesAndMergeLikeSums) {
+  Film a(2, 1, {"total"}, ColorSpace::sRGB);
+  a.enable_aovs(kAovAlpha | kAovDepth | kAovNormal);
+  const SampledWavelengths lambda = SampledWavelengths::sample_visible(0.3f, 4);
+  const SampledSpectrum black(0.f);
+  AovSample hit;
+  hit.surface = true;
+  hit.depth = 2.f;
+  hit.normal = {0, 0, 1};
+  AovSample miss;  // vacuum behind: transmittance 1
+  Film b = a.empty_like();
+  EXPECT_EQ(b.aovs(), a.aovs());
+  a.add_sample(0, 0, {&black, 1}, lambda, &hit);
+  a.add_sample(0, 0, {&black, 1}, lambda, &miss);
+  hit.depth = 4.f;
+  b.add_sample(0, 0, {&black, 1}, lambda, &hit);
+  b.add_sample(0, 0, {&black, 1}, lambda, &hit);
+  a.merge(b);  // pixel 0: 4 samples, 3 hits at depths 2, 4, 4; pixel 1: nothing
+  const Image img = a.to_image(4);
+  const ImageLayer* alpha = img.find_layer("alpha");
+  const ImageLayer* depth = img.find_layer("depth");
+  const ImageLayer* normal = img.find_layer("N");
+  ASSERT_TRUE(alpha && depth && normal);
+  EXPECT_EQ(img.find_layer("albedo"), nullptr) << "only the layers asked for";
+  EXPECT_DOUBLE_EQ(alpha->pixels[0], 0.75);
+  EXPECT_FLOAT_EQ(depth->pixels[0], 10.f / 3.f);  // Z: over the samples that hit
+  EXPECT_FLOAT_EQ(depth->pixels[1], 0.75f);       // coverage
+  EXPECT_TRUE(std::isinf(depth->pixels[2]));       // pixel 1 saw no surface
+  EXPECT_FLOAT_EQ(normal->pixels[2], 0.75f);
+  EXPECT_EQ(std::get<std::string>(*img.metadata.find("aovs")), "alpha,depth,normal");
+  Film other(2, 1, {"total"}, ColorSpace::sRGB);
+  EXPECT_THROW(a.merge(other), std::invalid_argument);
+  std::string unknown;
+  EXPECT_EQ(aov_mask({"albedo", "alpha"}, &unknown), AovMask(kAovAlbedo | kAovAlpha));
+  EXPECT_EQ(aov_mask({"albedo", "colour"}, &unknown), 0u);
+  EXPECT_EQ(unknown, "colour");
+}
