@@ -452,7 +452,9 @@ PYBIND11_MODULE(chlorovdb, m) {
   py::class_<RenderResult>(m, "RenderResult", "Film layers as NumPy arrays and the render's statistics")
       .def_readonly("width", &RenderResult::width)
       .def_readonly("height", &RenderResult::height)
-      .def_readonly("layers", &RenderResult::layers, "dict: layer name -> float32 array (height, width, 3), linear RGB")
+      .def_readonly("layers", &RenderResult::layers,
+                    "dict: layer name -> float32 array (height, width, channels): the linear RGB layers and their "
+                    "_stderr, and the AOVs asked for (alpha: 1 channel, depth: Z and coverage, N: 3, albedo: 3)")
       .def_readonly("spectral", &RenderResult::spectral,
                     "float32 array (height, width, bins): bin-averaged spectral radiance of the total layer, or None")
       .def_readonly("wavelengths_nm", &RenderResult::wavelengths_nm, "bin centres in nm, or None")
