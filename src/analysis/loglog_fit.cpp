@@ -1,5 +1,6 @@
 #include "analysis/loglog_fit.h"
 
+#include <algorithm>
 #include <cmath>
 
 namespace chlorovdb {
@@ -29,6 +30,21 @@ PowerFit fit_power_law(std::span<const double> x, std::span<const double> y) {
   fit.coefficient = std::exp((sy - fit.exponent * sx) / n);
   fit.r2 = vyy > 0 ? vxy * vxy / (vxx * vyy) : 1.0;
   return fit;
+}
+
+ExponentOverRuns mean_exponent(std::span<const PowerFit> fits) {
+  ExponentOverRuns r;
+  double sum = 0, sum2 = 0;
+  for (const PowerFit& f : fits) {
+    if (f.points < 2) continue;
+    sum += f.exponent;
+    sum2 += f.exponent * f.exponent;
+    ++r.runs;
+  }
+  if (r.runs == 0) return r;
+  r.mean = sum / r.runs;
+  if (r.runs > 1) r.standard_error = std::sqrt(std::max(0.0, (sum2 - r.runs * r.mean * r.mean) / (r.runs - 1)) / r.runs);
+  return r;
 }
 
 }  // namespace chlorovdb

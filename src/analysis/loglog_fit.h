@@ -17,4 +17,14 @@ struct PowerFit {
 // usable points (or all x equal) give points < 2 and exponent 0.
 PowerFit fit_power_law(std::span<const double> x, std::span<const double> y);
 
+// A convergence rate measured on independent runs (seeds): the mean of the runs'
+// fitted exponents and its standard error (their spread / sqrt(runs)), so a
+// rate is reported with the uncertainty that one run's fit cannot give.
+// Fits with fewer than two points are skipped; standard_error is 0 below two runs.
+struct ExponentOverRuns {
+  double mean = 0, standard_error = 0;
+  int runs = 0;
+};
+ExponentOverRuns mean_exponent(std::span<const PowerFit> fits);
+
 }  // namespace chlorovdb
