@@ -133,3 +133,55 @@ TEST(GlassExcitation, FullThroughIndexMatchedGlassAgreesWithDirect) {
   EXPECT_NEAR(b.mean(), a.mean(), 4 * std::hypot(a.sigma(), b.sigma()))
       << "full/direct " << b.mean() / a.mean() << " (σ/mean " << b.sigma() / b.mean() << ")";
 }
+
+namespace {
+
+// The 4 cm cuvette on a grey floor with a 10 cm UVB panel standing on the floor
+// 12 cm to its left (scenes/default.json's arrangement): much of the liquid's
+// excitation in `full` mode is UVB the floor beside the panel reflects into it,
+// which only continuation paths carry.
+std::string cuvette_on_floor_json(const std::string& directions) {
+  return R"({
+  "length_unit": "cm",
+  "render": {"resolution": [8, 8], "spp": 1, "wavelengths": 4, "fluorescence": "full",
+             "excitation_through_glass": "connect", "continuation_directions": ")" + directions + R"(", "max_depth": 64},
+  "camera": {"type": "orthographic", "position": [0, 3, 20], "look_at": [0, 3, 0], "height": 6},
+  "pigments": {"dye": )" + std::string(kUvbDye) + R"(},
+  "materials": {"floor": {"type": "diffuse", "albedo": 0.5}, "glass": {"type": "dielectric", "ior": 1.5},
+                "glass_to_solution": {"type": "dielectric", "ior": 0.8913}},
+  "media": {"solution": {"solvent": {"rayleigh": false},
+                         "pigments": [{"pigment": "dye", "concentration": 5, "unit": "uM"}]}},
+  "shapes": [
+    {"type": "quad", "corner": [-40, 0, -40], "edge_u": [0, 0, 80], "edge_v": [80, 0, 0], "material": "floor"},
+    {"type": "box", "min": [-2.2, 0.001, -2.2], "max": [2.2, 6.4, 2.2], "material": "glass"},
+    {"type": "box", "min": [-2.0, 0.2, -2.0], "max": [2.0, 6.2, 2.0], "material": "glass_to_solution",
+     "inside": "solution"},
+    {"type": "quad", "corner": [-14, 1, -5], "edge_u": [0, 10, 0], "edge_v": [0, 0, 10],
+     "emission": {"spectrum": "UVB-TL12", "scale": 1000}}
+  ]
+})";
+}
+
+}  // namespace
+
+TEST(GlassExcitation, ContinuationLobesTowardLightsAreUnbiased) {
+  // Continuation directions from the mixture of the uniform sphere and lobes
+  // toward the lights (the default) against the uniform sphere alone: both
+  // unbiased, so they agree within 4σ whatever share the floor-reflected UVB
+  // has; a lobe missing from the mixture's pdf (or counted twice) moves the
+  // mean by tens of per cent. Camera ray through the liquid's centre.
+  const Scene lobes = load_scene(write_scene("cuvette_floor_lobes", cuvette_on_floor_json("toward_lights")));
+  const Scene uniform = load_scene(write_scene("cuvette_floor_uniform", cuvette_on_floor_json("uniform")));
+  ASSERT_TRUE(lobes.settings.continuation_toward_lights);
+  ASSERT_FALSE(uniform.settings.continuation_toward_lights);
+  // The lobe's target bounds the 10 cm panel (half-diagonal 7.07 cm) loosely: its
+  // centre is the mean of a grid of area samples, which a two-triangle quad need not centre exactly.
+  ASSERT_GE(lobes.fluorescence[0][0].light_radius[0], 0.0707f);
+  ASSERT_LE(lobes.fluorescence[0][0].light_radius[0], 0.075f);
+  const Estimate a = cuvette_fluorescence(lobes, 400000, 41);
+  const Estimate b = cuvette_fluorescence(uniform, 400000, 42);
+  ASSERT_GT(a.mean(), 20 * a.sigma());
+  std::printf("lobes / uniform: %.4f (sigma %.4f); sigma lobes %.3g, uniform %.3g\n", a.mean() / b.mean(),
+              std::hypot(a.sigma(), b.sigma()) / b.mean(), a.sigma(), b.sigma());
+  EXPECT_NEAR(a.mean(), b.mean(), 4 * std::hypot(a.sigma(), b.sigma()));
+}
