@@ -26,21 +26,6 @@ inline Vec3 sample_uniform_sphere(Point2 u) {
 }
 inline constexpr float uniform_sphere_pdf() { return kInv4Pi; }
 
-// Von Mises-Fisher lobe around the unit direction mu with concentration kappa > 0:
-// p(w) = kappa / (2 pi (1 - e^{-2 kappa})) e^{kappa (dot(w, mu) - 1)}, written with
-// expm1 and the e^{kappa (cos - 1)} form so that neither small nor large kappa
-// loses precision (Jakob, "Numerically stable sampling of the von Mises-Fisher
-// distribution on S2", 2012).
-inline float vmf_pdf(float cos_theta, float kappa) {
-  return kappa / (2.f * kPi * -std::expm1(-2.f * kappa)) * std::exp(kappa * (cos_theta - 1.f));
-}
-inline Vec3 sample_vmf(Point2 u, const Vec3& mu, float kappa) {
-  const float w = std::clamp(1.f + std::log1p(u.x * std::expm1(-2.f * kappa)) / kappa, -1.f, 1.f);
-  const float r = std::sqrt(std::max(0.f, 1.f - w * w));
-  const float phi = 2.f * kPi * u.y;
-  return Frame::from_z(mu).to_world(Vec3{r * std::cos(phi), r * std::sin(phi), w});
-}
-
 // Concentric (Shirley-Chiu) disk mapping: area preserving, low distortion.
 inline Point2 sample_uniform_disk_concentric(Point2 u) {
   const float ox = 2.f * u.x - 1.f, oy = 2.f * u.y - 1.f;

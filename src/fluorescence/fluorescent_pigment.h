@@ -5,7 +5,6 @@
 // knows the lights' power).
 #include <vector>
 
-#include "core/vec.h"
 #include "fluorescence/excitation_sampler.h"
 #include "fluorescence/redistribution.h"
 #include "lights/light_sampler.h"
@@ -25,10 +24,6 @@ struct FluorescentPigment {
   std::vector<int> lights;                     // lights that can excite it
   std::vector<ExcitationSampler> excitation;   // parallel to `lights`
   LightSampler light_sampler;                  // over `lights`, weighted by excitation power
-  // Parallel to `lights`: a sphere bounding each area light (centre, radius in m),
-  // the target of the continuation's guiding lobe; radius < 0 for other lights.
-  std::vector<Vec3> light_centre;
-  std::vector<float> light_radius;
   // Some listed light shines in the absorption band (a light kept only to
   // measure the cost of not skipping dark lights does not count).
   bool excitation_possible() const {

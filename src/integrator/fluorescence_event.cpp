@@ -155,66 +155,6 @@ float direct_excitation(const Scene& scene, const FluorescentPigment& fp, const 
   return lp * kAbsorptionPerMolarExtinction * fp.epsilon(lp) * c * fluence;
 }
 
-// Direction of an excitation continuation from x. Uniform over the sphere, or
-// (render.continuation_directions = toward_lights, the default) a one-sample
-// mixture: with probability 1/2 uniform, else a von Mises-Fisher lobe around the
-// direction to one area light's bounding sphere (picked by the pigment's light
-// sampler), kappa = 1/θ² for the sphere's angular radius θ from x. The lobe is
-// wider than the light: what a lamp lights most brightly lies next to it (a
-// floor beside the lamp is nearly as bright as the lamp over a large patch, and
-// uniform directions reach it rarely with a large weight: the heavy tail of
-// `full` on scenes/default.json, docs/fluorescence.md). The pdf sums every
-// lobe, so any direction keeps a density of at least 1/(8π): unbiased. Paths the
-// connection owns are still dropped by the tracer, whatever sampled them.
-Vec3 sample_continuation_direction(const FluorescentPigment& fp, const Vec3& x, bool toward_lights, Rng& rng,
-                                   float* pdf) {
-  constexpr float kUniformShare = 0.5f;
-  float area_pmf = 0.f;
-  if (toward_lights)
-    for (size_t l = 0; l < fp.lights.size(); ++l)
-      if (fp.light_radius[l] >= 0.f) area_pmf += fp.light_sampler.pmf(fp.lights[l]);
-  if (!(area_pmf > 0.f)) {
-    *pdf = uniform_sphere_pdf();
-    return sample_uniform_sphere(Point2{rng.uniform(), rng.uniform()});
-  }
-  const float u_mix = rng.uniform();
-  const Point2 u{rng.uniform(), rng.uniform()};
-  // Lobe of slot l at x: its axis and concentration.
-  auto lobe = [&](size_t l, float* kappa) {
-    const Vec3 to = fp.light_centre[l] - x;
-    const float d = length(to);
-    const float theta = d > fp.light_radius[l] ? std::asin(fp.light_radius[l] / d) : 0.5f * kPi;
-    *kappa = std::clamp(1.f / (theta * theta), 0.1f, 1e4f);
-    return d > 0.f ? to / d : Vec3{0.f, 0.f, 1.f};
-  };
-  Vec3 w;
-  if (u_mix < kUniformShare) {
-    w = sample_uniform_sphere(u);
-  } else {
-    // A light by the pigment's sampler, restricted to the area lights.
-    float target = (u_mix - kUniformShare) / (1.f - kUniformShare) * area_pmf;
-    size_t pick = 0;
-    for (size_t l = 0; l < fp.lights.size(); ++l) {
-      if (fp.light_radius[l] < 0.f) continue;
-      pick = l;
-      target -= fp.light_sampler.pmf(fp.lights[l]);
-      if (target < 0.f) break;
-    }
-    float kappa;
-    const Vec3 mu = lobe(pick, &kappa);
-    w = sample_vmf(u, mu, kappa);
-  }
-  float p = kUniformShare * uniform_sphere_pdf();
-  for (size_t l = 0; l < fp.lights.size(); ++l) {
-    if (fp.light_radius[l] < 0.f) continue;
-    float kappa;
-    const Vec3 mu = lobe(l, &kappa);
-    p += (1.f - kUniformShare) * fp.light_sampler.pmf(fp.lights[l]) / area_pmf * vmf_pdf(dot(w, mu), kappa);
-  }
-  *pdf = p;
-  return w;
-}
-
 // Same quantity for the fluence that did not come straight from a light:
 // an excitation path at λ'' in a uniformly sampled direction.
 float indirect_excitation(const Scene& scene, const FluorescentPigment& fp, const Vec3& x, int medium, float c,
@@ -238,15 +178,14 @@ float indirect_excitation(const Scene& scene, const FluorescentPigment& fp, cons
 
   ++stats.excitation_continuations;
   SampledWavelengths wl = SampledWavelengths::single(lp);
-  float pdf_w;
-  const Vec3 w = sample_continuation_direction(fp, x, scene.settings.continuation_toward_lights, rng, &pdf_w);
+  const Vec3 w = sample_uniform_sphere(Point2{rng.uniform(), rng.uniform()});
   PathOptions options;
   options.skip_emitters_on_first_segment = true;
   options.skip_emitters_the_connection_owns = scene.settings.excitation_connect;
   options.fluorescence_depth = depth + 1;
   const PathRadiance sub = trace_path_from(scene, Ray{x, w}, medium, wl, rng, stats, options);
   const float radiance = sub.fluorescence[0] + sub.other[0];
-  const float fluence = radiance / (pdf_w * pdf_lambda * p_continue);
+  const float fluence = radiance / (uniform_sphere_pdf() * pdf_lambda * p_continue);
   return lp * kAbsorptionPerMolarExtinction * eps * c * fluence;
 }
 

@@ -66,10 +66,6 @@ struct RenderSettings {
   // λ' of an excitation sample ∝ S·ε·λ' (importance) or uniform over the same band.
   ExcitationSampling excitation_sampling = ExcitationSampling::importance;
   QuantumYieldMode quantum_yield_mode = QuantumYieldMode::weight;
-  // Direction of a `full`-mode excitation continuation: a mixture of the uniform
-  // sphere and lobes toward the area lights (true), or the uniform sphere alone
-  // (render.continuation_directions = "uniform", kept to measure the lobes).
-  bool continuation_toward_lights = true;
 };
 
 // How the integrator treats one medium, resolved once at load from the settings

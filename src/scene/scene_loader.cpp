@@ -1,6 +1,5 @@
 #include "scene/scene_loader.h"
 
-#include <array>
 #include <cmath>
 #include <map>
 
@@ -87,8 +86,6 @@ RenderSettings read_render_settings(ParamReader& top, const SceneOverrides& o, s
     s.quantum_yield_mode = r->get_enum("quantum_yield_mode", "weight", {"weight", "roulette"}) == "roulette"
                                ? QuantumYieldMode::roulette
                                : QuantumYieldMode::weight;
-    s.continuation_toward_lights =
-        r->get_enum("continuation_directions", "toward_lights", {"toward_lights", "uniform"}) == "toward_lights";
     r->finish();
   } else {
     *transmittance = "auto";
@@ -305,25 +302,6 @@ std::string why_direct_is_not_exact(const Scene& scene) {
   return {};
 }
 
-// A sphere around an area light from a 17x17 grid of points on it (u, v in [0, 1],
-// so a quad's corners are among them): the target of the continuation lobes,
-// which need not bound the light exactly. Radius -1 for lights that are not areas.
-std::pair<Vec3, float> bounding_sphere(const Light& light, const GeometryScene& geometry) {
-  const auto* area = std::get_if<AreaLight>(&light);
-  if (!area) return {Vec3{}, -1.f};
-  constexpr int kGrid = 17;
-  std::array<Vec3, kGrid * kGrid> points;
-  Vec3 centre{};
-  for (int i = 0; i < kGrid * kGrid; ++i) {
-    points[i] = geometry.sample_area(area->shape_id, Point2{(i / kGrid) / float(kGrid - 1), (i % kGrid) / float(kGrid - 1)}).p;
-    centre += points[i];
-  }
-  centre = centre / float(points.size());
-  float radius = 0.f;
-  for (const Vec3& p : points) radius = std::max(radius, length(p - centre));
-  return {centre, radius};
-}
-
 void setup_fluorescence(Scene& scene, const std::string& mode) {
   for (size_t m = 0; m < scene.media.size(); ++m) {
     for (FluorescentPigment& fp : scene.fluorescence[m]) {
@@ -341,9 +319,6 @@ void setup_fluorescence(Scene& scene, const std::string& mode) {
         fp.lights.push_back(int(l));
         fp.excitation.push_back(std::move(es));
         weights.push_back(w);
-        const auto [centre, radius] = bounding_sphere(light, scene.geometry);
-        fp.light_centre.push_back(centre);
-        fp.light_radius.push_back(radius);
       }
       if (!fp.lights.empty()) fp.light_sampler = LightSampler(fp.lights, relative_weights(weights));
     }
