@@ -3,6 +3,7 @@
 // rate of an estimator (k = -1/2 for Monte Carlo) and the cost growth of a
 // tracker against optical depth or grid size.
 #include <span>
+#include <vector>
 
 namespace chlorovdb {
 
@@ -17,14 +18,17 @@ struct PowerFit {
 // usable points (or all x equal) give points < 2 and exponent 0.
 PowerFit fit_power_law(std::span<const double> x, std::span<const double> y);
 
-// A convergence rate measured on independent runs (seeds): the mean of the runs'
-// fitted exponents and its standard error (their spread / sqrt(runs)), so a
-// rate is reported with the uncertainty that one run's fit cannot give.
-// Fits with fewer than two points are skipped; standard_error is 0 below two runs.
-struct ExponentOverRuns {
+// A quantity measured on independent runs (seeds): its mean and the standard
+// error of that mean (the runs' sample spread / sqrt(runs); 0 below two runs).
+struct MeanOverRuns {
   double mean = 0, standard_error = 0;
   int runs = 0;
 };
-ExponentOverRuns mean_exponent(std::span<const PowerFit> fits);
+MeanOverRuns mean_over_runs(std::span<const double> values);
+
+// A convergence rate measured on independent runs: mean_over_runs of the runs'
+// fitted exponents, so a rate is reported with the uncertainty that one run's
+// fit cannot give. Fits with fewer than two points are skipped.
+MeanOverRuns mean_exponent(std::span<const PowerFit> fits);
 
 }  // namespace chlorovdb

@@ -59,7 +59,7 @@ TEST(LogLogFit, MeanExponentOverRunsHasTheSpreadOfTheRuns) {
   std::vector<PowerFit> fits;
   for (double k : {-0.9, -1.0, -1.1}) fits.push_back(PowerFit{k, 1.0, 1.0, 5});
   fits.push_back(PowerFit{7.0, 1.0, 1.0, 1});
-  const ExponentOverRuns r = mean_exponent(fits);
+  const MeanOverRuns r = mean_exponent(fits);
   EXPECT_EQ(r.runs, 3);
   EXPECT_NEAR(r.mean, -1.0, 1e-12);
   EXPECT_NEAR(r.standard_error, 0.1 / std::sqrt(3.0), 1e-12);

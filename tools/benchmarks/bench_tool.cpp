@@ -8,7 +8,6 @@
 #include <cmath>
 #include <fstream>
 #include <map>
-#include <numeric>
 #include <sstream>
 #include <time.h>
 
@@ -196,14 +195,8 @@ int slope(const std::vector<std::string>& files, const std::string& layer, const
     l.top_share.push_back(rows.back().top_pixel_share);
     l.bias.push_back(rows.back().relative_bias());
   }
-  auto mean = [](const std::vector<double>& v) { return v.empty() ? 0.0 : std::accumulate(v.begin(), v.end(), 0.0) / v.size(); };
-  auto standard_error = [&](const std::vector<double>& v) {
-    if (v.size() < 2) return 0.0;
-    const double m = mean(v);
-    double s = 0;
-    for (double x : v) s += (x - m) * (x - m);
-    return std::sqrt(s / (v.size() - 1) / v.size());
-  };
+  auto mean = [](const std::vector<double>& v) { return mean_over_runs(v).mean; };
+  auto standard_error = [](const std::vector<double>& v) { return mean_over_runs(v).standard_error; };
   auto product = [&](const Label& l) { return mean(l.rel_mse) * mean(l.seconds); };
   const double base = by_label.count(baseline) ? product(by_label[baseline]) : 0.0;
   fmt::print("| variant | seeds | relMSE slope (ref. share removed) | raw | RMSE slope | spp | relMSE | CPU s | relMSE × s | vs {} "
@@ -212,7 +205,7 @@ int slope(const std::vector<std::string>& files, const std::string& layer, const
   fmt::print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
   for (const std::string& label : order) {
     const Label& l = by_label[label];
-    const ExponentOverRuns c = mean_exponent(l.corrected), r = mean_exponent(l.raw);
+    const MeanOverRuns c = mean_exponent(l.corrected), r = mean_exponent(l.raw);
     fmt::print("| {} | {} | {:.3f} ± {:.3f} | {:.3f} ± {:.3f} | {:.3f} ± {:.3f} | {} | {:.3e} ± {:.1e} | {:.2f} | {:.3e} | {} | {:.1f} / {:.1f} % | "
                "{:+.1f} ± {:.1f} % |\n",
                label, c.runs, c.mean, c.standard_error, r.mean, r.standard_error, c.mean / 2, c.standard_error / 2, l.spp,
