@@ -61,7 +61,8 @@ if [ "$(cat "$dir/reference.stamp" 2>/dev/null)" != "$stamp" ]; then rm -f "$ref
 eval "flags=(${flags_of[$REF_VARIANT]})"
 "$CHLOROVDB" reference "$scene" -o "$ref" --spp "$REF_SPP" --resolution "$RESOLUTION" --seed "$REF_SEED" \
   --threads "$REF_THREADS" --checkpoint-every 60 --resume -q "${flags[@]}" 2> "$dir/reference.log"
-echo "$stamp" > "$dir/reference.stamp"
+# Rewritten only when the settings change: its time marks the runs that are still valid.
+[ "$(cat "$dir/reference.stamp" 2>/dev/null)" = "$stamp" ] || echo "$stamp" > "$dir/reference.stamp"
 ref_seconds=$(grep -o 'wall_time_s[^0-9]*[0-9.]*' <(oiiotool --info -v "$ref" 2>/dev/null) | grep -o '[0-9.]*$' || echo '?')
 
 for label in "${labels[@]}"; do
@@ -70,7 +71,7 @@ for label in "${labels[@]}"; do
     run="$dir/$label-seed$seed"
     run_stamp="$stamp | $spp $THREADS ${flags_of[$label]}"
     # Cached while the reference, the spp list and the flags are unchanged.
-    [ "$(cat "$run.stamp" 2>/dev/null)" = "$run_stamp" ] && [ "$run.csv" -nt "$ref" ] && continue
+    [ "$(cat "$run.stamp" 2>/dev/null)" = "$run_stamp" ] && [ "$run.csv" -nt "$dir/reference.stamp" ] && continue
     "$CHLOROVDB" converge "$scene" --reference "$ref" --resolution "$RESOLUTION" --threads "$THREADS" \
       --seed "$seed" --spp "$spp" --clock cpu --label "$label" "${flags[@]}" -o "$run" > "$run.log" 2>&1
     echo "$run_stamp" > "$run.stamp"
