@@ -31,4 +31,24 @@ PowerFit fit_power_law(std::span<const double> x, std::span<const double> y) {
   return fit;
 }
 
+MeanOverRuns mean_over_runs(std::span<const double> values) {
+  MeanOverRuns r;
+  r.runs = int(values.size());
+  if (r.runs == 0) return r;
+  for (double v : values) r.mean += v;
+  r.mean /= r.runs;
+  if (r.runs < 2) return r;
+  double s2 = 0;
+  for (double v : values) s2 += (v - r.mean) * (v - r.mean);
+  r.standard_error = std::sqrt(s2 / (r.runs - 1) / r.runs);
+  return r;
+}
+
+MeanOverRuns mean_exponent(std::span<const PowerFit> fits) {
+  std::vector<double> exponents;
+  for (const PowerFit& f : fits)
+    if (f.points >= 2) exponents.push_back(f.exponent);
+  return mean_over_runs(exponents);
+}
+
 }  // namespace chlorovdb

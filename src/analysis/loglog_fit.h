@@ -3,6 +3,7 @@
 // rate of an estimator (k = -1/2 for Monte Carlo) and the cost growth of a
 // tracker against optical depth or grid size.
 #include <span>
+#include <vector>
 
 namespace chlorovdb {
 
@@ -16,5 +17,18 @@ struct PowerFit {
 // Points with a non-positive or non-finite x or y are ignored; fewer than two
 // usable points (or all x equal) give points < 2 and exponent 0.
 PowerFit fit_power_law(std::span<const double> x, std::span<const double> y);
+
+// A quantity measured on independent runs (seeds): its mean and the standard
+// error of that mean (the runs' sample spread / sqrt(runs); 0 below two runs).
+struct MeanOverRuns {
+  double mean = 0, standard_error = 0;
+  int runs = 0;
+};
+MeanOverRuns mean_over_runs(std::span<const double> values);
+
+// A convergence rate measured on independent runs: mean_over_runs of the runs'
+// fitted exponents, so a rate is reported with the uncertainty that one run's
+// fit cannot give. Fits with fewer than two points are skipped.
+MeanOverRuns mean_exponent(std::span<const PowerFit> fits);
 
 }  // namespace chlorovdb

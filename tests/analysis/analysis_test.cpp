@@ -54,6 +54,19 @@ TEST(LogLogFit, RecoversAnExactPowerLaw) {
   EXPECT_LT(fit_power_law(std::vector<double>{1.0}, std::vector<double>{1.0}).points, 2);
 }
 
+TEST(LogLogFit, MeanExponentOverRunsHasTheSpreadOfTheRuns) {
+  // Exponents -0.9, -1.0, -1.1 (+ one unusable fit): mean -1, sample sd 0.1, se 0.1/sqrt(3).
+  std::vector<PowerFit> fits;
+  for (double k : {-0.9, -1.0, -1.1}) fits.push_back(PowerFit{k, 1.0, 1.0, 5});
+  fits.push_back(PowerFit{7.0, 1.0, 1.0, 1});
+  const MeanOverRuns r = mean_exponent(fits);
+  EXPECT_EQ(r.runs, 3);
+  EXPECT_NEAR(r.mean, -1.0, 1e-12);
+  EXPECT_NEAR(r.standard_error, 0.1 / std::sqrt(3.0), 1e-12);
+  EXPECT_EQ(mean_exponent(std::vector<PowerFit>{PowerFit{-0.5, 1.0, 1.0, 3}}).standard_error, 0.0);
+  EXPECT_EQ(mean_exponent(std::vector<PowerFit>{}).runs, 0);
+}
+
 TEST(SvgPlot, WritesOnePolylinePerSeriesAndTheGuide) {
   LogLogPanel p{"t", "x", "y", {{"a", {1, 10, 100}, {1, 0.3, 0.1}}, {"b", {1, 10}, {2, 0.5}}}, -0.5};
   const std::string svg = loglog_svg({p, p});

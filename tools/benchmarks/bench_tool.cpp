@@ -1,6 +1,7 @@
 // chlorovdb_bench: the helper behind tools/benchmarks/run.sh (not installed).
 //   plot   CSV... -o OUT.svg      RMSE against time / samples, one series per CSV label
 //   table  CSV... --baseline L    markdown efficiency table (last point of each label)
+//   slope  CSV... --baseline L    convergence rate over seeds (one CSV per seed) and relMSE x time
 //   cost-growth --out DIR         time per sample against optical depth and grid size
 // CSVs are those of `chlorovdb converge`.
 #include <chrono>
@@ -31,6 +32,7 @@ struct Row {
   int spp = 0;
   double seconds = 0, budget = 0, mse = 0, rmse = 0, rel_mse = 0, bias = 0, efficiency = 0;
   double reference_mean = 0, efficiency_rel = 0;
+  double reference_rel_variance = 0, top_pixel_share = 0;  // 0 in CSVs older than these columns
   // Mean bias relative to the reference's mean, both images clamped at the
   // reference's 99.9th percentile (analysis/image_error.h): about 0 (within
   // noise) for an unbiased estimator; -1: the variant renders nothing of this layer.
@@ -79,6 +81,8 @@ std::vector<Row> read_rows(const std::vector<std::string>& files, const std::str
         r.reference_mean = std::stod(c[col["reference_mean_clamped"]]);
       }
       r.efficiency_rel = col.count("efficiency_rel") ? std::stod(c[col["efficiency_rel"]]) : 0.0;
+      r.reference_rel_variance = col.count("reference_rel_variance") ? std::stod(c[col["reference_rel_variance"]]) : 0.0;
+      r.top_pixel_share = col.count("top_pixel_share") ? std::stod(c[col["top_pixel_share"]]) : 0.0;
       rows.push_back(r);
     }
   }
@@ -151,6 +155,64 @@ int best(const std::vector<std::string>& files, const std::string& layer, const 
   }
   fmt::print("{} {:.2f} {:+.1f} {:+.1f}\n", top, last[top].efficiency_rel / last[baseline].efficiency_rel,
              100 * last[top].relative_bias(), 100 * last[baseline].relative_bias());
+  return 0;
+}
+
+// Convergence rate and equal-effort error of each label, measured over seeds:
+// every CSV is one seed's progressive run (spp 1, 2, 4, ...). Per label:
+// the relMSE-vs-spp exponent fitted per seed on relMSE minus the reference's
+// own share (so a finite reference does not flatten the tail; expected -1, the
+// RMSE exponent being half of it), also without that correction; at the largest
+// spp, relMSE and CPU time averaged over seeds, their product (lower is better:
+// `vs` is baseline's product / this one's, the equal-time efficiency ratio) and
+// the share of the squared error held by the worst 0.1 % of pixels (mean, max).
+int slope(const std::vector<std::string>& files, const std::string& layer, const std::string& baseline) {
+  struct Label {
+    std::vector<PowerFit> corrected, raw;
+    std::vector<double> rel_mse, seconds, top_share, bias;
+    int spp = 0;
+  };
+  std::vector<std::string> order;
+  std::map<std::string, Label> by_label;
+  for (const std::string& file : files) {
+    std::vector<Row> rows = read_rows({file}, layer);
+    if (rows.empty()) continue;
+    std::sort(rows.begin(), rows.end(), [](const Row& a, const Row& b) { return a.spp < b.spp; });
+    if (!by_label.count(rows.front().label)) order.push_back(rows.front().label);
+    Label& l = by_label[rows.front().label];
+    std::vector<double> spp, corrected, raw;
+    for (const Row& r : rows) {
+      spp.push_back(r.spp);
+      corrected.push_back(r.rel_mse - r.reference_rel_variance);
+      raw.push_back(r.rel_mse);
+    }
+    l.corrected.push_back(fit_power_law(spp, corrected));
+    l.raw.push_back(fit_power_law(spp, raw));
+    if (l.spp != 0 && l.spp != rows.back().spp) throw InputError(file, "spp", std::to_string(rows.back().spp), "seeds of one label must end at the same spp");
+    l.spp = rows.back().spp;
+    l.rel_mse.push_back(rows.back().rel_mse);
+    l.seconds.push_back(rows.back().seconds);
+    l.top_share.push_back(rows.back().top_pixel_share);
+    l.bias.push_back(rows.back().relative_bias());
+  }
+  auto mean = [](const std::vector<double>& v) { return mean_over_runs(v).mean; };
+  auto standard_error = [](const std::vector<double>& v) { return mean_over_runs(v).standard_error; };
+  auto product = [&](const Label& l) { return mean(l.rel_mse) * mean(l.seconds); };
+  const double base = by_label.count(baseline) ? product(by_label[baseline]) : 0.0;
+  fmt::print("| variant | seeds | relMSE slope (ref. share removed) | raw | RMSE slope | spp | relMSE | CPU s | relMSE × s | vs {} "
+             "| worst 0.1 % px share (mean / max) | mean bias |\n",
+             baseline);
+  fmt::print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
+  for (const std::string& label : order) {
+    const Label& l = by_label[label];
+    const MeanOverRuns c = mean_exponent(l.corrected), r = mean_exponent(l.raw);
+    fmt::print("| {} | {} | {:.3f} ± {:.3f} | {:.3f} ± {:.3f} | {:.3f} ± {:.3f} | {} | {:.3e} ± {:.1e} | {:.2f} | {:.3e} | {} | {:.1f} / {:.1f} % | "
+               "{:+.1f} ± {:.1f} % |\n",
+               label, c.runs, c.mean, c.standard_error, r.mean, r.standard_error, c.mean / 2, c.standard_error / 2, l.spp,
+               mean(l.rel_mse), standard_error(l.rel_mse), mean(l.seconds), product(l),
+               base > 0 && product(l) > 0 ? fmt::format("{:.2f}×", base / product(l)) : "–", 100 * mean(l.top_share),
+               100 * *std::max_element(l.top_share.begin(), l.top_share.end()), 100 * mean(l.bias), 100 * standard_error(l.bias));
+  }
   return 0;
 }
 
@@ -332,6 +394,10 @@ int main(int argc, char** argv) {
   b->add_option("--layer", layer);
   b->add_option("--baseline", baseline)->required();
   b->add_option("--among", candidates, "Only these labels");
+  CLI::App* sl = app.add_subcommand("slope", "Convergence rate over seeds and relMSE x time from converge CSVs (one per seed)");
+  sl->add_option("csv", files)->required();
+  sl->add_option("--layer", layer);
+  sl->add_option("--baseline", baseline, "Label the efficiency ratios are relative to");
   CLI::App* c = app.add_subcommand("cost-growth", "Time per sample against optical depth and grid size");
   bool large = false;
   int threads = 0;
@@ -343,6 +409,7 @@ int main(int argc, char** argv) {
     if (p->parsed()) return plot(files, layer, title, out, time_label);
     if (t->parsed()) return table(files, layer, baseline);
     if (b->parsed()) return best(files, layer, baseline, candidates);
+    if (sl->parsed()) return slope(files, layer, baseline);
     return cost_growth(out, large, threads);
   } catch (const std::exception& e) {
     fmt::print(stderr, "chlorovdb_bench: error: {}\n", e.what());
