@@ -192,8 +192,8 @@ TEST(SpecularConnection, AreaLightThroughWallMatchesForwardRefraction) {
 }
 
 TEST(SpecularConnection, ContinuationThroughWallIsOwned) {
-  // The straight line's chain decides: a walk through the same two faces is
-  // owned; one through another face (or with a face left out) is not.
+  // The solve from the straight line decides: a walk through the solved
+  // vertices is owned; one with a vertex elsewhere (or a face left out) is not.
   const Scene scene = load_scene(write_scene("connect_owns", wall_scene(R"(,
     {"type": "quad", "corner": [0.3, -0.05, 0.05], "edge_u": [0, 0.1, 0], "edge_v": [0, 0, -0.1],
      "emission": {"spectrum": {"gaussian": [420, 8]}, "scale": 5}}])")));
@@ -202,13 +202,18 @@ TEST(SpecularConnection, ContinuationThroughWallIsOwned) {
   ASSERT_TRUE(chain);
   ASSERT_EQ(chain->count, 2);
   EXPECT_TRUE(chain->planar_parallel);
-  EXPECT_TRUE(connection_owns(scene, x, y, *chain));
-  SpecularChain shorter = *chain;
+  const auto path = solve_refracted_path(scene, *chain, x, y, false, kLambda);
+  ASSERT_TRUE(path);
+  SpecularChain walked = *chain;
+  for (int j = 0; j < 2; ++j) walked.faces[j] = path->face[j];
+  EXPECT_TRUE(connection_owns(scene, x, y, walked, kLambda));
+  EXPECT_FALSE(connection_owns(scene, x, y, *chain, kLambda)) << "the straight line's crossings are not the path";
+  SpecularChain shorter = walked;
   shorter.count = 1;
-  EXPECT_FALSE(connection_owns(scene, x, y, shorter));
-  SpecularChain other = *chain;
-  other.faces[1].offset += 0.01f;
-  EXPECT_FALSE(connection_owns(scene, x, y, other));
+  EXPECT_FALSE(connection_owns(scene, x, y, shorter, kLambda));
+  SpecularChain other = walked;
+  other.faces[1].p.y += 0.01f;
+  EXPECT_FALSE(connection_owns(scene, x, y, other, kLambda));
 }
 
 }  // namespace
