@@ -289,9 +289,9 @@ std::optional<RefractedPath> solve_manifold_path(const Scene& scene, const Specu
 
   std::array<double, kMaxUnknowns> c, c_trial, step;
   std::array<double, kMaxUnknowns * kMaxUnknowns> J;
-  std::array<double, kMaxUnknowns * 2> rhs, unused;
+  std::array<double, kMaxUnknowns * 2> rhs;
   const int m = 2 * k;
-  double r = M.residual(&c, &J, &unused, nullptr, nullptr, nullptr);
+  double r = M.residual(&c, &J, nullptr, nullptr, nullptr, nullptr);
   double beta = 1;
   bool converged = r < kConstraintTolerance;
   for (int it = 0; it < kMaxNewtonSteps && !converged; ++it) {
@@ -318,7 +318,7 @@ std::optional<RefractedPath> solve_manifold_path(const Scene& scene, const Specu
     if (!accepted) return std::nullopt;
     beta = std::min(1.0, 4 * beta);  // undo the loop's last halving, then grow back
     converged = r < kConstraintTolerance;
-    if (!converged) M.residual(&c, &J, &unused, nullptr, nullptr, nullptr);
+    if (!converged) M.residual(&c, &J, nullptr, nullptr, nullptr, nullptr);
   }
   if (!converged) return std::nullopt;
 
