@@ -384,7 +384,7 @@ TEST(SpecularManifold, SmoothFlaskConnectionPartitionsContinuationsExactly) {
   // within 4σ; the connection carries most of it (so a double count, or
   // dropping paths it does not produce, is many σ away).
   const Scene scene = load_scene(write_scene("manifold_partition", flask_scene(kFlaskPanel)));
-  Rng rng(23, 0);
+  Rng rng(test_seed(23), 0);
   PathStats stats;
   auto continuation = [&](bool drop_owned) {
     Estimate e;
@@ -428,7 +428,7 @@ TEST(SpecularManifold, PointLightThroughSmoothFlaskMatchesASmallDisk) {
   ASSERT_EQ(scene.lights.size(), 2u);
   SampledWavelengths wl = SampledWavelengths::single(kLambda);
   PreparedMedia media(scene, wl);
-  Rng rng(5, 0);
+  Rng rng(test_seed(5), 0);
   const auto point = connect_through_dielectrics(scene, kInFlask, 0, 1, Point2{0.5f, 0.5f}, media, rng);
   ASSERT_TRUE(point);
   ASSERT_GT(*point, 0.f);
