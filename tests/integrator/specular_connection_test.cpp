@@ -10,6 +10,7 @@
 
 #include "core/sampling.h"
 #include "test_scenes.h"
+#include "test_seed.h"
 
 namespace chlorovdb::test {
 namespace {
