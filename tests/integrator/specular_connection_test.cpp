@@ -96,9 +96,11 @@ TEST(SpecularConnection, GeometryTermMatchesFiniteDifferences) {
 
 // A glass wall (outer face x = 2.2 cm, inner x = 2 cm) of a huge cuvette; the
 // solution absorbs at 420 nm (μ_a = 100 ln10 · 20000 · 5e-6 ≈ 23 /m); x at the origin.
-std::string wall_scene(const std::string& light) {
+// Everything but the shapes: a dye absorbing 380-480 nm in a solution, glass, and the
+// glass-to-solution interface; `fluorescence` mode, excitation through glass = connect.
+std::string dye_scene_head(const std::string& fluorescence) {
   return R"({
-  "render": {"resolution": [4, 4], "spp": 1, "wavelengths": 1, "fluorescence": "direct",
+  "render": {"resolution": [4, 4], "spp": 1, "wavelengths": 1, "fluorescence": ")" + fluorescence + R"(",
              "excitation_through_glass": "connect"},
   "camera": {"type": "orthographic", "position": [0, 0, 2], "look_at": [0, 0, 0], "height": 0.01},
   "pigments": {"dye": {"extinction": {"table": {"lambda": [379.999, 380, 480, 480.001], "value": [0, 20000, 20000, 0]}},
@@ -107,7 +109,11 @@ std::string wall_scene(const std::string& light) {
                 "glass_to_solution": {"type": "dielectric", "ior": 0.8913}},
   "media": {"solution": {"solvent": "none", "pigments": [{"pigment": "dye", "concentration": 5, "unit": "uM"}]}},
   "shapes": [
-    {"type": "box", "min": [-1, -1, -1], "max": [0.022, 1, 1], "material": "glass"},
+)";
+}
+
+std::string wall_scene(const std::string& light) {
+  return dye_scene_head("direct") + R"(    {"type": "box", "min": [-1, -1, -1], "max": [0.022, 1, 1], "material": "glass"},
     {"type": "box", "min": [-0.98, -0.98, -0.98], "max": [0.02, 0.98, 0.98], "material": "glass_to_solution",
      "inside": "solution"})" + light + "}";
 }
@@ -288,17 +294,7 @@ std::string write_smooth_sphere(const std::string& name, float radius) {
 
 // A round flask: 5 mm glass around 4.5 cm of pigment solution, both smooth-shaded meshes.
 std::string flask_scene(const std::string& light) {
-  return R"({
-  "render": {"resolution": [4, 4], "spp": 1, "wavelengths": 1, "fluorescence": "full",
-             "excitation_through_glass": "connect"},
-  "camera": {"type": "orthographic", "position": [0, 0, 2], "look_at": [0, 0, 0], "height": 0.01},
-  "pigments": {"dye": {"extinction": {"table": {"lambda": [379.999, 380, 480, 480.001], "value": [0, 20000, 20000, 0]}},
-                       "quantum_yield": 0.5, "emission": {"gaussian": [650, 10]}}},
-  "materials": {"glass": {"type": "dielectric", "ior": 1.5},
-                "glass_to_solution": {"type": "dielectric", "ior": 0.8913}},
-  "media": {"solution": {"solvent": "none", "pigments": [{"pigment": "dye", "concentration": 5, "unit": "uM"}]}},
-  "shapes": [
-    {"type": "mesh", "file": ")" + write_smooth_sphere("flask_glass", 0.05f) + R"(", "material": "glass"},
+  return dye_scene_head("full") + R"(    {"type": "mesh", "file": ")" + write_smooth_sphere("flask_glass", 0.05f) + R"(", "material": "glass"},
     {"type": "mesh", "file": ")" + write_smooth_sphere("flask_solution", 0.045f) + R"(", "material": "glass_to_solution",
      "inside": "solution"})" + light + "}";
 }
@@ -418,35 +414,39 @@ TEST(SpecularManifold, SmoothFlaskConnectionPartitionsContinuationsExactly) {
   EXPECT_LT(all.sigma(), 0.05 * all.mean());
 }
 
-TEST(SpecularManifold, PointLightThroughSmoothFlaskMatchesASmallDisk) {
-  // A point light behind curved glass has no other strategy; its connection
-  // must equal the limit of a small area light of the same intensity (disk of
-  // radius 2 mm facing x, I = Le · area), whose connection the partition test
-  // checks against continuations.
-  const Scene scene = load_scene(write_scene("manifold_point", flask_scene(R"(,
+TEST(SpecularManifold, SpotLightThroughSmoothFlaskMatchesASmallDisk) {
+  // A spot light behind curved glass has no other strategy; its connection must
+  // equal the limit of a small area light of the same intensity toward x (disk
+  // of radius 2 mm, I = Le · A · cos θ), whose connection the partition test
+  // checks against continuations. The spot's edge (cone 30°, falloff 10°) is
+  // placed so x sees it partly dimmed.
+  const Vec3 p_light(0.3f, 0.05f, -0.03f);
+  const Scene scene = load_scene(write_scene("manifold_spot", flask_scene(R"(,
     {"type": "disk", "center": [0.3, 0.05, -0.03], "normal": [-1, -0.15, 0.1], "radius": 0.002,
      "emission": {"spectrum": {"gaussian": [420, 8]}, "scale": 5}}],
-  "lights": [{"type": "point", "position": [0.3, 0.05, -0.03], "spectrum": {"gaussian": [420, 8]}, "scale": 2e-5}])")));
+  "lights": [{"type": "spot", "position": [0.3, 0.05, -0.03], "look_at": [0.05, -0.09, 0.04], "cone_angle": 30,
+              "falloff_angle": 10, "spectrum": {"gaussian": [420, 8]}, "scale": 2e-5}])")));
   ASSERT_EQ(scene.lights.size(), 2u);
   SampledWavelengths wl = SampledWavelengths::single(kLambda);
   PreparedMedia media(scene, wl);
   Rng rng(test_seed(5), 0);
-  const auto point = connect_through_dielectrics(scene, kInFlask, 0, 1, Point2{0.5f, 0.5f}, media, rng);
-  ASSERT_TRUE(point);
-  ASSERT_GT(*point, 0.f);
+  const auto spot = connect_through_dielectrics(scene, kInFlask, 0, 1, Point2{0.5f, 0.5f}, media, rng);
+  ASSERT_TRUE(spot);
+  ASSERT_GT(*spot, 0.f);
   Estimate disk;
   for (int i = 0; i < 20000; ++i)
     disk.add(*connect_through_dielectrics(scene, kInFlask, 0, 0, Point2{rng.uniform(), rng.uniform()}, media, rng));
-  const Vec3 n_disk = normalize(Vec3(-1.f, -0.15f, 0.1f)), to_x = normalize(kInFlask - Vec3(0.3f, 0.05f, -0.03f));
-  // I_disk = Le · A · cos θ toward x (radiance along the leg; the disk is far, 2 mm against 30 cm).
-  const auto chain = straight_line_chain(scene, kInFlask, Vec3(0.3f, 0.05f, -0.03f), false);
-  const auto path = solve_refracted_path(scene, *chain, kInFlask, Vec3(0.3f, 0.05f, -0.03f), false, kLambda);
+  const auto chain = straight_line_chain(scene, kInFlask, p_light, false);
+  ASSERT_TRUE(chain);
+  const auto path = solve_refracted_path(scene, *chain, kInFlask, p_light, false, kLambda);
   ASSERT_TRUE(path);
-  const double cos_disk = std::fabs(dot(n_disk, path->dir[2]));
-  const double expected_ratio = 2e-5 / (5 * scene.geometry.area(0 + 2) * cos_disk);
-  (void)to_x;
-  EXPECT_NEAR(*point / disk.mean(), expected_ratio, 4 * disk.sigma() / disk.mean() * expected_ratio + 1e-3 * expected_ratio)
-      << "point " << *point << ", disk " << disk.mean() << " ± " << disk.sigma();
+  const float falloff = spot_falloff(std::get<SpotLight>(scene.lights[1]), -path->dir[2]);
+  EXPECT_GT(falloff, 0.05f);
+  EXPECT_LT(falloff, 0.95f);
+  const double cos_disk = std::fabs(dot(normalize(Vec3(-1.f, -0.15f, 0.1f)), path->dir[2]));
+  const double expected_ratio = 2e-5 * falloff / (5 * scene.geometry.area(2) * cos_disk);
+  EXPECT_NEAR(*spot / disk.mean(), expected_ratio, (4 * disk.sigma() / disk.mean() + 1e-3) * expected_ratio)
+      << "spot " << *spot << ", disk " << disk.mean() << " ± " << disk.sigma();
 }
 
 
