@@ -230,6 +230,44 @@ TEST(SpecularConnection, ContinuationThroughWallIsOwned) {
 namespace chlorovdb::test {
 namespace {
 
+// Fluence at x from light 0 three ways: every continuation path (what `full`
+// mode's continuation does: uniform directions, emitters skipped on the first
+// segment; exact with excitation rays that stop at glass), the continuations
+// the connection does not own, and the connection itself.
+struct PartitionEstimates {
+  Estimate all, rest, connect;
+  double sigma() const {
+    return std::sqrt(all.sigma() * all.sigma() + rest.sigma() * rest.sigma() + connect.sigma() * connect.sigma());
+  }
+};
+PartitionEstimates partition_estimates(const Scene& scene, const Vec3& x, int paths, int connections, uint64_t seed) {
+  Rng rng(test_seed(seed), 0);
+  PathStats stats;
+  auto continuation = [&](bool drop_owned) {
+    Estimate e;
+    PathOptions options;
+    options.skip_emitters_on_first_segment = true;
+    options.skip_emitters_the_connection_owns = drop_owned;
+    for (int i = 0; i < paths; ++i) {
+      SampledWavelengths wl = SampledWavelengths::single(kLambda);
+      const Vec3 w = sample_uniform_sphere(Point2{rng.uniform(), rng.uniform()});
+      const PathRadiance L = trace_path_from(scene, Ray{x, w}, 0, wl, rng, stats, options);
+      e.add(double(L.other[0] + L.fluorescence[0]) * 4 * kPi);
+    }
+    return e;
+  };
+  PartitionEstimates p;
+  p.all = continuation(false);
+  p.rest = continuation(true);
+  SampledWavelengths wl = SampledWavelengths::single(kLambda);
+  PreparedMedia media(scene, wl);
+  for (int i = 0; i < connections; ++i)
+    p.connect.add(*connect_through_dielectrics(scene, x, 0, 0, Point2{rng.uniform(), rng.uniform()}, media, rng));
+  std::printf("fluence: all paths %.5g ± %.2g, not owned %.5g ± %.2g, connection %.5g ± %.2g\n", p.all.mean(),
+              p.all.sigma(), p.rest.mean(), p.rest.sigma(), p.connect.mean(), p.connect.sigma());
+  return p;
+}
+
 TEST(SpecularConnection, PartitionWithContinuationsCountsEachPathOnce) {
   // Fluence at x by paths in uniform directions (what `full` mode's
   // continuation does): all of them, against the ones the connection does not
@@ -238,35 +276,11 @@ TEST(SpecularConnection, PartitionWithContinuationsCountsEachPathOnce) {
   const Scene scene = load_scene(write_scene("connect_partition", wall_scene(R"(,
     {"type": "quad", "corner": [0.3, -0.1, 0.1], "edge_u": [0, 0.2, 0], "edge_v": [0, 0, -0.2],
      "emission": {"spectrum": {"gaussian": [420, 8]}, "scale": 5}}])")));
-  Rng rng(11, 0);
-  PathStats stats;
-  auto continuation = [&](bool drop_owned) {
-    Estimate e;
-    PathOptions options;
-    options.skip_emitters_on_first_segment = true;
-    options.skip_emitters_the_connection_owns = drop_owned;
-    for (int i = 0; i < 400000; ++i) {
-      SampledWavelengths wl = SampledWavelengths::single(kLambda);
-      const Vec3 w = sample_uniform_sphere(Point2{rng.uniform(), rng.uniform()});
-      const PathRadiance L = trace_path_from(scene, Ray{Vec3(0.f), w}, 0, wl, rng, stats, options);
-      e.add(double(L.other[0] + L.fluorescence[0]) * 4 * kPi);
-    }
-    return e;
-  };
-  const Estimate all = continuation(false), rest = continuation(true);
-  Estimate connect;
-  SampledWavelengths wl = SampledWavelengths::single(kLambda);
-  PreparedMedia media(scene, wl);
-  for (int i = 0; i < 100000; ++i)
-    connect.add(*connect_through_dielectrics(scene, Vec3(0.f), 0, 0, Point2{rng.uniform(), rng.uniform()}, media, rng));
-  const double sigma = std::sqrt(all.sigma() * all.sigma() + rest.sigma() * rest.sigma() + connect.sigma() * connect.sigma());
-  EXPECT_NEAR(all.mean(), rest.mean() + connect.mean(), 4 * sigma)
-      << "all " << all.mean() << " ± " << all.sigma() << ", rest " << rest.mean() << " ± " << rest.sigma()
-      << ", connect " << connect.mean() << " ± " << connect.sigma();
-  std::printf("fluence: all paths %.5g ± %.2g, not owned %.5g ± %.2g, connection %.5g ± %.2g\n", all.mean(),
-              all.sigma(), rest.mean(), rest.sigma(), connect.mean(), connect.sigma());
-  EXPECT_LT(rest.mean(), 0.5 * all.mean());
-  EXPECT_LT(all.sigma(), 0.05 * all.mean());
+  const PartitionEstimates p = partition_estimates(scene, Vec3(0.f), 400000, 100000, 11);
+  EXPECT_NEAR(p.all.mean(), p.rest.mean() + p.connect.mean(), 4 * p.sigma());
+  EXPECT_GT(p.connect.mean(), 10 * p.sigma());
+  EXPECT_LT(p.rest.mean(), 0.5 * p.all.mean());
+  EXPECT_LT(p.all.sigma(), 0.05 * p.all.mean());
 }
 
 }  // namespace
@@ -382,36 +396,11 @@ TEST(SpecularManifold, SmoothFlaskConnectionPartitionsContinuationsExactly) {
   // within 4σ; the connection carries most of it (so a double count, or
   // dropping paths it does not produce, is many σ away).
   const Scene scene = load_scene(write_scene("manifold_partition", flask_scene(kFlaskPanel)));
-  Rng rng(test_seed(23), 0);
-  PathStats stats;
-  auto continuation = [&](bool drop_owned) {
-    Estimate e;
-    PathOptions options;
-    options.skip_emitters_on_first_segment = true;
-    options.skip_emitters_the_connection_owns = drop_owned;
-    for (int i = 0; i < 300000; ++i) {
-      SampledWavelengths wl = SampledWavelengths::single(kLambda);
-      const Vec3 w = sample_uniform_sphere(Point2{rng.uniform(), rng.uniform()});
-      const PathRadiance L = trace_path_from(scene, Ray{kInFlask, w}, 0, wl, rng, stats, options);
-      e.add(double(L.other[0] + L.fluorescence[0]) * 4 * kPi);
-    }
-    return e;
-  };
-  const Estimate all = continuation(false), rest = continuation(true);
-  Estimate connect;
-  SampledWavelengths wl = SampledWavelengths::single(kLambda);
-  PreparedMedia media(scene, wl);
-  for (int i = 0; i < 100000; ++i)
-    connect.add(*connect_through_dielectrics(scene, kInFlask, 0, 0, Point2{rng.uniform(), rng.uniform()}, media, rng));
-  const double sigma = std::sqrt(all.sigma() * all.sigma() + rest.sigma() * rest.sigma() + connect.sigma() * connect.sigma());
-  EXPECT_NEAR(all.mean(), rest.mean() + connect.mean(), 4 * sigma)
-      << "all " << all.mean() << " ± " << all.sigma() << ", rest " << rest.mean() << " ± " << rest.sigma()
-      << ", connect " << connect.mean() << " ± " << connect.sigma();
-  std::printf("flask fluence: all paths %.5g ± %.2g, not owned %.5g ± %.2g, connection %.5g ± %.2g\n", all.mean(),
-              all.sigma(), rest.mean(), rest.sigma(), connect.mean(), connect.sigma());
-  EXPECT_GT(connect.mean(), 10 * sigma);
-  EXPECT_LT(rest.mean(), 0.3 * all.mean());
-  EXPECT_LT(all.sigma(), 0.05 * all.mean());
+  const PartitionEstimates p = partition_estimates(scene, kInFlask, 300000, 100000, 23);
+  EXPECT_NEAR(p.all.mean(), p.rest.mean() + p.connect.mean(), 4 * p.sigma());
+  EXPECT_GT(p.connect.mean(), 10 * p.sigma());
+  EXPECT_LT(p.rest.mean(), 0.3 * p.all.mean());
+  EXPECT_LT(p.all.sigma(), 0.05 * p.all.mean());
 }
 
 TEST(SpecularManifold, SpotLightThroughSmoothFlaskMatchesASmallDisk) {
