@@ -18,18 +18,6 @@ const Dielectric& dielectric_of(const Scene& scene, int shape_id) {
   return std::get<Dielectric>(scene.materials[scene.shapes[shape_id].material]);
 }
 
-// Solved vertices sit on their triangle up to float rounding.
-SurfaceHit vertex_hit(const ChainFace& f, const Vec3& ns, const Vec3& p) {
-  SurfaceHit h;
-  h.p = p;
-  h.ng = f.ng;
-  h.ns = ns;
-  h.shape_id = f.shape_id;
-  h.prim_id = f.prim_id;
-  h.p_error = 64.f * 0x1p-24f * (max_component(abs(p)) + 1e-3f);
-  return h;
-}
-
 // True when the ray from `ray.o` reaches face `f`'s shape at distance `dist`
 // (its vertex) before any other surface that is not pass-through. On a smooth
 // mesh a vertex on an edge may be reported on either triangle: the shape decides.
@@ -50,6 +38,17 @@ bool leg_reaches_face(const Scene& scene, Ray ray, float dist, const ChainFace& 
 }
 
 }  // namespace
+
+SurfaceHit solved_vertex_hit(const ChainFace& f, const Vec3& ns) {
+  SurfaceHit h;
+  h.p = f.p;
+  h.ng = f.ng;
+  h.ns = ns;
+  h.shape_id = f.shape_id;
+  h.prim_id = f.prim_id;
+  h.p_error = 64.f * 0x1p-24f * (max_component(abs(f.p)) + 1e-3f);  // on its triangle up to float rounding
+  return h;
+}
 
 double planar_lateral_offset(std::span<const double> h, std::span<const double> n, double s) {
   double r = 0;
@@ -250,7 +249,7 @@ std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3&
     const Vec3& d = path->dir[j];
     const Ray ray = j == 0 ? Ray{x, d} : scene.geometry.spawn_ray(prev, d);
     if (!leg_reaches_face(scene, ray, length(v - ray.o), f)) return 0.f;
-    const SurfaceHit here = vertex_hit(f, path->ns[j], v);
+    const SurfaceHit here = solved_vertex_hit(f, path->ns[j]);
     // Traced from the face back to the previous vertex: spawn_ray_to stops short
     // of its target, and a medium point has no surface to stop short of.
     const SampledSpectrum T = j == 0 ? leg_transmittance(ShadowOrigin{v, leg_medium, &here}, LightTarget{-d, x})

@@ -86,6 +86,9 @@ struct RefractedPath {
   // cross-section far away per cross-section at x (power conservation).
   double geometry = 0;
 };
+// A solved vertex as a surface hit (for spawning the next leg off it).
+SurfaceHit solved_vertex_hit(const ChainFace& f, const Vec3& ns);
+
 // Through the seed chain from x to the point y, or leaving toward the direction
 // y (to_infinity). Relative indices from the chain's dielectrics at `lambda_nm`.
 // Planar-parallel chains take the closed form, others the manifold solver.

@@ -113,13 +113,8 @@ bool place_along(ManifoldVertex* v, const Vec3d& o, const Vec3d& d) {
 }
 
 SurfaceHit vertex_surface(const ManifoldVertex& v) {
-  SurfaceHit h;
-  h.p = to_float(v.x);
-  h.ng = to_float(v.ng);
-  h.ns = to_float(v.n);
-  h.shape_id = v.shape_id, h.prim_id = v.prim_id;
-  h.p_error = 64.f * 0x1p-24f * (max_component(abs(h.p)) + 1e-3f);
-  return h;
+  const Vec3 p = to_float(v.x), ng = to_float(v.ng);
+  return solved_vertex_hit(ChainFace{v.shape_id, v.prim_id, ng, dot(ng, p), p}, to_float(v.n));
 }
 
 // Gaussian elimination with partial pivoting: A (m × m, row-major) X = B (m × r).
