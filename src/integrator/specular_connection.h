@@ -21,8 +21,8 @@
 // that same path (connection_owns: same shapes, vertices within tolerance). The
 // solver is deterministic in (x, y, λ'), so each refracted path x → y is counted
 // once: by the connection when the solve from its own endpoint finds it, by the
-// continuation otherwise (other solutions, non-convergence, spheres, paths with a
-// reflection). Delta lights have no second strategy: what the solver misses is
+// continuation otherwise (other solutions, non-convergence, straight lines that
+// cross other faces than the path, spheres, paths with a reflection). Delta lights have no second strategy: what the solver misses is
 // missing energy (measured in docs/fluorescence.md).
 #include <array>
 #include <optional>
@@ -112,8 +112,8 @@ bool connection_owns(const Scene& scene, const Vec3& x, const Vec3& y, const Spe
 // through the dielectric chain seeded by the straight line to one light sample
 // (area lights: a point uniform by area from `u`):  L · Π(1 − R_i) · T_media ·
 // (n_x / n_light)² · dω/dA_⊥ · |cos θ_light| / pdf_A, or the delta lights'
-// equivalents (R_i at the shading normal, as the path tracer refracts). Zero when the path is blocked or the chain is not one it solves.
-// Environment lights are not handled (returns nullopt: the caller falls back).
+// equivalents (R_i at the shading normal, as the path tracer refracts). Zero
+// when the path is blocked or no path is found. Environment lights are not handled (returns nullopt: the caller falls back).
 std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3& x, int medium, int light_index,
                                                  Point2 u, PreparedMedia& media, Rng& rng);
 
