@@ -420,18 +420,37 @@ bool GeometryScene::occluded(const Ray& ray, float t_max) const {
 }
 
 bool GeometryScene::flat_face(int shape_id, int prim_id) const {
-  const auto& shape = impl_->shapes[shape_id];
-  if (std::holds_alternative<BoxShape>(shape)) return true;
-  const auto* m = std::get_if<MeshShape>(&shape);
-  if (!m) return false;
-  const TriangleMesh& mesh = m->mesh;
-  if (mesh.normals.empty()) return true;
-  const uint32_t* idx = &mesh.indices[3 * prim_id];
-  const Vec3 ng = normalize(cross(mesh.positions[idx[1]] - mesh.positions[idx[0]],
-                                  mesh.positions[idx[2]] - mesh.positions[idx[0]]));
-  for (int v = 0; v < 3; ++v)
-    if (dot(mesh.normals[idx[v]], ng) < 1.f - 1e-6f) return false;
+  const auto patch = surface_patch(shape_id, prim_id);
+  if (!patch) return false;
+  for (const Vec3& n : patch->n)
+    if (dot(n, patch->ng) < 1.f - 1e-6f) return false;
   return true;
+}
+
+std::optional<SurfacePatch> GeometryScene::surface_patch(int shape_id, int prim_id) const {
+  const auto& shape = impl_->shapes[shape_id];
+  SurfacePatch patch;
+  if (const auto* b = std::get_if<BoxShape>(&shape)) {
+    const int axis = prim_id / 2, u = axis == 0 ? 1 : 0, v = axis == 2 ? 1 : 2;
+    const bool max_face = prim_id % 2 == 1;
+    Vec3 corner = b->box.lo;
+    corner[axis] = max_face ? b->box.hi[axis] : b->box.lo[axis];
+    patch.p = {corner, corner, corner};
+    patch.p[1][u] = b->box.hi[u];
+    patch.p[2][v] = b->box.hi[v];
+    patch.ng = Vec3(0.f);
+    patch.ng[axis] = max_face ? 1.f : -1.f;
+    patch.n = {patch.ng, patch.ng, patch.ng};
+    return patch;
+  }
+  const auto* m = std::get_if<MeshShape>(&shape);
+  if (!m) return std::nullopt;
+  const TriangleMesh& mesh = m->mesh;
+  const uint32_t* idx = &mesh.indices[3 * prim_id];
+  for (int k = 0; k < 3; ++k) patch.p[k] = mesh.positions[idx[k]];
+  patch.ng = normalize(cross(patch.p[1] - patch.p[0], patch.p[2] - patch.p[0]));
+  for (int k = 0; k < 3; ++k) patch.n[k] = mesh.normals.empty() ? patch.ng : mesh.normals[idx[k]];
+  return patch;
 }
 
 ShapeSample GeometryScene::sample_area(int shape_id, Point2 u) const {

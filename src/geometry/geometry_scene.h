@@ -5,6 +5,7 @@
 // a slab test costs a tenth of an Embree query, and a scene that holds only
 // such boxes (the cloud benchmark) never calls Embree.
 // Embree stays behind a pimpl: no other folder includes <embree3/rtcore.h>.
+#include <array>
 #include <memory>
 #include <optional>
 
@@ -25,6 +26,17 @@ struct SurfaceHit {
                  // boxes: the face's other two coordinates in [0, 1], in axis order
   int shape_id = -1, prim_id = -1;  // boxes: prim_id = 2 axis + (1 on the max face)
   float p_error = 0;  // bound on |p - exact surface point| per axis, metres (drives spawn offsets)
+};
+
+// The plane patch a hit lies on, for solvers that move a point over a surface
+// (manifold next-event estimation): a triangle's corners and vertex shading
+// normals. Points p[0] + b1 (p[1] - p[0]) + b2 (p[2] - p[0]) continue the plane
+// beyond the edges and the shading normal interpolates the same way
+// (normalize(b0 n[0] + b1 n[1] + b2 n[2]), turned to ng's side, as in a hit).
+// Box faces: three corners of the face, its normal at each.
+struct SurfacePatch {
+  std::array<Vec3, 3> p, n;
+  Vec3 ng;  // unit, CCW-outward
 };
 
 struct ShapeSample {
@@ -61,6 +73,8 @@ class GeometryScene {
   // shading normals or whose three vertex normals equal the face normal.
   // Spheres and smooth-shaded triangles are not.
   bool flat_face(int shape_id, int prim_id) const;
+  // The patch of (shape_id, prim_id); nullopt for spheres (not piecewise planar).
+  std::optional<SurfacePatch> surface_patch(int shape_id, int prim_id) const;
 
   ShapeSample sample_area(int shape_id, Point2 u) const;
   float area(int shape_id) const;  // m²

@@ -211,7 +211,7 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
     }
 
     const ShapeBinding& binding = scene.shapes[hit->shape_id];
-    if (binding.area_light >= 0 && !(walked_only_glass && connection_owns(scene, origin, hit->p, walked)))
+    if (binding.area_light >= 0 && !(walked_only_glass && connection_owns(scene, origin, hit->p, walked, lambda[0])))
       add_emitted(Le_area(std::get<AreaLight>(scene.lights[binding.area_light]), hit->ng, -ray.d, lambda),
                   binding.area_light, &*hit);
 

@@ -29,8 +29,9 @@ struct PathOptions {
   // excitation ray, so its first segment ignores emitters.
   bool skip_emitters_on_first_segment = false;
   // With excitation_through_glass = connect the excitation ray also owns the
-  // paths to area lights through parallel planar glass (connection_owns in
-  // integrator/specular_connection.h): the continuation ignores those.
+  // paths to area lights through glass that its solver finds from their own
+  // endpoint (connection_owns in integrator/specular_connection.h): the
+  // continuation ignores those. Paths are single-wavelength (λ = lambda[0]).
   bool skip_emitters_the_connection_owns = false;
   int fluorescence_depth = 0;  // nesting of excitation continuations
   int max_segments = 1 << 16;  // hard bound on the loop (interfaces + collisions)

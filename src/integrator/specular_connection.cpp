@@ -11,24 +11,16 @@ namespace {
 constexpr float kStopShort = 1e-4f;
 // Normals this close are one plane orientation (cos of ~0.08°).
 constexpr float kParallelCos = 1.f - 1e-6f;
+// A walked vertex within this fraction of |y − x| of the solved one is the same path.
+constexpr float kOwnedVertexTolerance = 1e-4f;
 
 const Dielectric& dielectric_of(const Scene& scene, int shape_id) {
   return std::get<Dielectric>(scene.materials[scene.shapes[shape_id].material]);
 }
 
-// Solved vertices sit on a plane up to the rounding of x + H N + R e.
-SurfaceHit vertex_hit(const ChainFace& f, const Vec3& p) {
-  SurfaceHit h;
-  h.p = p;
-  h.ng = h.ns = f.ng;
-  h.shape_id = f.shape_id;
-  h.prim_id = f.prim_id;
-  h.p_error = 64.f * 0x1p-24f * (max_component(abs(p)) + 1e-3f);
-  return h;
-}
-
-// True when the ray from `ray.o` reaches face `f` at distance `dist` before any
-// other surface that is not pass-through.
+// True when the ray from `ray.o` reaches face `f`'s shape at distance `dist`
+// (its vertex) before any other surface that is not pass-through. On a smooth
+// mesh a vertex on an edge may be reported on either triangle: the shape decides.
 bool leg_reaches_face(const Scene& scene, Ray ray, float dist, const ChainFace& f) {
   const float slack = 1e-3f * dist + 1e-6f;
   float travelled = 0.f;
@@ -37,8 +29,7 @@ bool leg_reaches_face(const Scene& scene, Ray ray, float dist, const ChainFace& 
     if (!hit) return false;
     const ShapeBinding& b = scene.shapes[hit->shape_id];
     if (!is_pass_through(scene, b)) {
-      const ChainFace g{hit->shape_id, hit->prim_id, hit->ng, dot(hit->ng, hit->p), hit->p};
-      return same_face(f, g) && std::fabs(travelled + hit->t - dist) <= slack;
+      return hit->shape_id == f.shape_id && std::fabs(travelled + hit->t - dist) <= slack;
     }
     travelled += hit->t;
     ray = scene.geometry.spawn_ray(*hit, ray.d);
@@ -47,6 +38,17 @@ bool leg_reaches_face(const Scene& scene, Ray ray, float dist, const ChainFace& 
 }
 
 }  // namespace
+
+SurfaceHit solved_vertex_hit(const ChainFace& f, const Vec3& ns) {
+  SurfaceHit h;
+  h.p = f.p;
+  h.ng = f.ng;
+  h.ns = ns;
+  h.shape_id = f.shape_id;
+  h.prim_id = f.prim_id;
+  h.p_error = 64.f * 0x1p-24f * (max_component(abs(f.p)) + 1e-3f);  // on its triangle up to float rounding
+  return h;
+}
 
 double planar_lateral_offset(std::span<const double> h, std::span<const double> n, double s) {
   double r = 0;
@@ -101,11 +103,6 @@ double planar_solid_angle_per_area(std::span<const double> h, std::span<const do
   return 1 / (n0 * n0 * q * dr * cos0 * cosk);
 }
 
-bool same_face(const ChainFace& a, const ChainFace& b) {
-  return a.shape_id == b.shape_id && dot(a.ng, b.ng) > kParallelCos &&
-         std::fabs(a.offset - b.offset) <= 1e-6f + 1e-5f * std::fabs(a.offset);
-}
-
 std::optional<SpecularChain> straight_line_chain(const Scene& scene, const Vec3& x, const Vec3& y, bool to_infinity) {
   SpecularChain c;
   float t_max;
@@ -136,34 +133,49 @@ std::optional<SpecularChain> straight_line_chain(const Scene& scene, const Vec3&
   return std::nullopt;
 }
 
-bool connection_owns(const Scene& scene, const Vec3& x, const Vec3& y, const SpecularChain& walked) {
+std::array<double, kMaxSpecularChain + 1> chain_indices(const Scene& scene, const SpecularChain& chain,
+                                                        const Vec3& toward, float lambda_nm) {
+  std::array<double, kMaxSpecularChain + 1> n{};
+  n[0] = 1;
+  for (int j = 0; j < chain.count; ++j) {
+    const ChainFace& f = chain.faces[j];
+    const float eta = ior_at(dielectric_of(scene, f.shape_id), lambda_nm);
+    n[j + 1] = n[j] * (dot(toward, f.ng) < 0.f ? eta : 1.f / eta);  // entering: n_inside / n_outside
+  }
+  return n;
+}
+
+bool connection_owns(const Scene& scene, const Vec3& x, const Vec3& y, const SpecularChain& walked, float lambda_nm) {
   if (walked.count == 0) return false;  // straight to the light: the first-segment rule owns it
   const auto c = straight_line_chain(scene, x, y, false);
-  if (!c || !c->planar_parallel || c->count != walked.count) return false;
-  for (int i = 0; i < c->count; ++i)
-    if (!same_face(c->faces[i], walked.faces[i])) return false;
+  if (!c || c->count != walked.count) return false;
+  const auto path = solve_refracted_path(scene, *c, x, y, false, lambda_nm);
+  if (!path) return false;
+  // The walked vertices carry the float error of hits and refracted directions
+  // (≈ 1e-6 of the path); distinct solutions through the same shapes lie far apart.
+  const float tolerance = kOwnedVertexTolerance * length(y - x);
+  for (int j = 0; j < c->count; ++j)
+    if (path->face[j].shape_id != walked.faces[j].shape_id || length(path->face[j].p - walked.faces[j].p) > tolerance)
+      return false;
   return true;
 }
 
 std::optional<RefractedPath> solve_refracted_path(const Scene& scene, const SpecularChain& chain, const Vec3& x,
                                                   const Vec3& y, bool to_infinity, float lambda_nm) {
-  if (!chain.planar_parallel) return std::nullopt;
+  if (!chain.planar_parallel) return solve_manifold_path(scene, chain, x, y, to_infinity, lambda_nm);
   const int k = chain.count;
   const Vec3 toward = to_infinity ? y : y - x;
   Vec3 N = k > 0 ? chain.faces[0].ng : normalize(toward);
   if (dot(N, toward) < 0.f) N = -N;
   RefractedPath P;
   P.count = k;
+  P.n = chain_indices(scene, chain, toward, lambda_nm);
   std::array<double, kMaxSpecularChain + 1> h{};
-  P.n[0] = 1;
   double z_prev = dot(N, x);
   for (int j = 0; j < k; ++j) {
-    const ChainFace& f = chain.faces[j];
-    const double c = dot(N, f.p);
+    const double c = dot(N, chain.faces[j].p);
     h[j] = std::max(0.0, c - z_prev);
     z_prev = c;
-    const float eta = ior_at(dielectric_of(scene, f.shape_id), lambda_nm);
-    P.n[j + 1] = P.n[j] * (dot(toward, f.ng) < 0.f ? eta : 1.f / eta);  // entering: n_inside / n_outside
   }
   const std::span<const double> hs(h.data(), k + 1), ns(P.n.data(), k + 1);
   Vec3 lateral = toward - N * dot(toward, N);
@@ -179,18 +191,23 @@ std::optional<RefractedPath> solve_refracted_path(const Scene& scene, const Spec
     const auto solved = solve_planar_invariant(hs, ns, lateral_len);
     if (!solved) return std::nullopt;
     s = *solved;
-    P.solid_angle_per_area = planar_solid_angle_per_area(hs, ns, s);
+    P.geometry = planar_solid_angle_per_area(hs, ns, s);
   }
+  std::array<double, kMaxSpecularChain + 1> cos_theta{};
   double H = 0, R = 0;
   for (int i = 0; i <= k; ++i) {
     const double sin_i = s / P.n[i];
-    P.cos_theta[i] = std::sqrt(std::max(0.0, 1 - sin_i * sin_i));
-    P.dir[i] = normalize(N * float(P.cos_theta[i]) + e * float(sin_i));
+    cos_theta[i] = std::sqrt(std::max(0.0, 1 - sin_i * sin_i));
+    P.dir[i] = normalize(N * float(cos_theta[i]) + e * float(sin_i));
     if (i == k) break;
     H += h[i];
-    R += h[i] * sin_i / P.cos_theta[i];
-    P.vertex[i] = x + N * float(H) + e * float(R);
+    R += h[i] * sin_i / cos_theta[i];
+    P.face[i] = chain.faces[i];
+    P.face[i].p = x + N * float(H) + e * float(R);
+    P.ns[i] = chain.faces[i].ng;
   }
+  // A collimated beam's cross-section changes by cos θ_last / cos θ_0 (power conservation at every plane).
+  if (to_infinity) P.geometry = cos_theta[k] / cos_theta[0];
   return P;
 }
 
@@ -227,12 +244,12 @@ std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3&
   int leg_medium = medium;
   SurfaceHit prev;
   for (int j = 0; j < k; ++j) {
-    const ChainFace& f = chain->faces[j];
-    const Vec3& v = path->vertex[j];
+    const ChainFace& f = path->face[j];
+    const Vec3& v = f.p;
     const Vec3& d = path->dir[j];
     const Ray ray = j == 0 ? Ray{x, d} : scene.geometry.spawn_ray(prev, d);
     if (!leg_reaches_face(scene, ray, length(v - ray.o), f)) return 0.f;
-    const SurfaceHit here = vertex_hit(f, v);
+    const SurfaceHit here = solved_vertex_hit(f, path->ns[j]);
     // Traced from the face back to the previous vertex: spawn_ray_to stops short
     // of its target, and a medium point has no surface to stop short of.
     const SampledSpectrum T = j == 0 ? leg_transmittance(ShadowOrigin{v, leg_medium, &here}, LightTarget{-d, x})
@@ -240,7 +257,8 @@ std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3&
     weight *= T[0];
     if (weight == 0.f) return 0.f;
     const ShapeBinding& b = scene.shapes[f.shape_id];
-    weight *= 1.f - fresnel_dielectric(dot(-d, f.ng), ior_at(dielectric_of(scene, f.shape_id), wl[0]));
+    // At the shading normal, as the path tracer's dielectric refracts.
+    weight *= 1.f - fresnel_dielectric(dot(-d, path->ns[j]), ior_at(dielectric_of(scene, f.shape_id), wl[0]));
     if (weight == 0.f) return 0.f;
     leg_medium = medium_after_crossing(b, f.ng, d);
     prev = here;
@@ -251,13 +269,11 @@ std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3&
   if (weight == 0.f) return 0.f;
 
   if (to_infinity) {
-    // A collimated beam: irradiance across the beam changes by the ratio of its
-    // cross-sections, cos θ_last / cos θ_0 (power conservation at every plane).
     const auto& distant = std::get<DistantLight>(light);
-    return distant.L.sample(wl)[0] * distant.scale * weight * float(path->cos_theta[k] / path->cos_theta[0]);
+    return distant.L.sample(wl)[0] * distant.scale * weight * float(path->geometry);
   }
   // Radiance compressed into the denser medium: (n_x / n_light)², n_x = 1 here.
-  const float g = float(path->solid_angle_per_area / (path->n[k] * path->n[k]));
+  const float g = float(path->geometry / (path->n[k] * path->n[k]));
   if (const auto* area = std::get_if<AreaLight>(&light)) {
     const float Le = Le_area(*area, n_light, -d_last, wl)[0];
     return Le * weight * g * std::fabs(dot(n_light, d_last)) / pdf_area;

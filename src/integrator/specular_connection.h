@@ -1,22 +1,29 @@
 #pragma once
 // Excitation connections through smooth dielectric surfaces: from a point in a
 // medium to a point, spot, distant or area light through a chain of up to
-// kMaxSpecularChain *parallel planar* dielectric faces (cuvette walls, a free
-// surface), by solving for the refracted path exactly (Snell's invariant
-// s = n_i sin θ_i, a 1-D monotone root) at the excitation wavelength.
+// kMaxSpecularChain dielectric faces, by solving for the refracted path at the
+// excitation wavelength (Sellmeier glass bends each λ' by its own index).
 //
-// The chain is seeded by the straight line from the point to the light: the
-// dielectric faces it crosses, in order. A connection is made only when they
-// are all parallel planes (box faces, flat-shaded triangles); the refracted path
-// through those planes is unique (the optical path length is strictly convex),
-// and it counts only if it really crosses those faces and nothing else.
+// The chain is seeded by the straight line from the point x to the light point
+// y: the dielectric faces it crosses, in order. Two solvers, one per geometry:
+// - all faces parallel planes (box faces, flat-shaded triangles): Snell's
+//   invariant s = n_i sin θ_i, a 1-D monotone root, exact and unique (the
+//   optical path length is strictly convex);
+// - anything else on meshes (smooth-shaded triangles, non-parallel planes):
+//   manifold next-event estimation (Hanika, Droske & Fascione 2015; the Newton
+//   walk of Zeltner, Georgiev & Jakob 2020), specular_manifold.cpp. It finds the
+//   solution its seed converges to, if any; others through the same faces are missed.
+// A solved path counts only if each leg really reaches its face and nothing else.
 //
-// Partition with `full` mode's continuation paths: a continuation from x that
-// reaches an area light through dielectric transmissions only is dropped exactly
-// when connection_owns() says the connection would have produced that path
-// (same faces as the straight line's chain, all parallel). Everything else —
-// curved or smooth-shaded glass, chains with a reflection, faces the straight
-// line does not cross (near a vessel's edges) — stays with the continuation.
+// Partition with `full` mode's continuation paths (area lights): a continuation
+// from x that reaches an area light at y through dielectric transmissions only
+// is dropped exactly when the solver, seeded by the straight line x → y, returns
+// that same path (connection_owns: same shapes, vertices within tolerance). The
+// solver is deterministic in (x, y, λ'), so each refracted path x → y is counted
+// once: by the connection when the solve from its own endpoint finds it, by the
+// continuation otherwise (other solutions, non-convergence, straight lines that
+// cross other faces than the path, spheres, paths with a reflection). Delta lights have no second strategy: what the solver misses is
+// missing energy (measured in docs/fluorescence.md).
 #include <array>
 #include <optional>
 #include <span>
@@ -46,51 +53,67 @@ std::optional<double> solve_planar_invariant(std::span<const double> h, std::spa
 double planar_solid_angle_per_area(std::span<const double> h, std::span<const double> n, double s);
 
 // ---- Chains in a scene ----
-// A dielectric face crossed: the shape and its plane (geometric normal, offset
-// dot(ng, p)). Two triangles of one flat quad are the same face.
+// A dielectric face crossed: the shape, the triangle (or box face) and its
+// plane (geometric normal, offset dot(ng, p)), and where the path meets it.
 struct ChainFace {
   int shape_id = -1, prim_id = -1;
   Vec3 ng;
   float offset = 0.f;
-  Vec3 p;  // where the crossing ray met it
+  Vec3 p;
 };
 struct SpecularChain {
   std::array<ChainFace, kMaxSpecularChain> faces;
   int count = 0;
   bool planar_parallel = true;  // all faces flat-shaded planes with parallel normals
 };
-bool same_face(const ChainFace& a, const ChainFace& b);
 
 // The dielectric faces crossed by the straight line from x toward y (or along
 // y as a direction to infinity). nullopt when an opaque surface is crossed or
 // more than kMaxSpecularChain dielectric faces are.
 std::optional<SpecularChain> straight_line_chain(const Scene& scene, const Vec3& x, const Vec3& y, bool to_infinity);
 
-// A path a continuation walked from x (dielectric transmissions at `walked`,
-// then the light at y): true when the connection strategy produces it.
-bool connection_owns(const Scene& scene, const Vec3& x, const Vec3& y, const SpecularChain& walked);
-
-// The solved refracted path: vertices on the chain's faces, leg directions
-// (toward the light), Snell's cosines and the layers' relative indices.
+// The solved refracted path: its vertices (face[j].p, on the triangle face[j]
+// names, with the shading normal ns[j] there), leg directions toward the light,
+// the layers' relative indices and the generalised geometry term.
 struct RefractedPath {
   int count = 0;
-  std::array<Vec3, kMaxSpecularChain> vertex;
+  std::array<ChainFace, kMaxSpecularChain> face;
+  std::array<Vec3, kMaxSpecularChain> ns;
   std::array<Vec3, kMaxSpecularChain + 1> dir;
-  std::array<double, kMaxSpecularChain + 1> cos_theta, n;
-  double solid_angle_per_area = 0;  // dω_0 / dA_⊥ at the end (finite end only)
+  std::array<double, kMaxSpecularChain + 1> n;
+  // Finite end: dω_0 / dA_⊥, the solid angle at x per unit area perpendicular
+  // to the last leg at y. Distant light: dA_⊥(beam) / dA_⊥(x), the beam's
+  // cross-section far away per cross-section at x (power conservation).
+  double geometry = 0;
 };
-// Through the chain's planes from x to the point y, or leaving toward the
-// direction wi (to_infinity). Relative indices from the chain's dielectrics at
-// `lambda_nm`. nullopt when the chain is not planar-parallel or no path exists.
+// A solved vertex as a surface hit (for spawning the next leg off it).
+SurfaceHit solved_vertex_hit(const ChainFace& f, const Vec3& ns);
+
+// Through the seed chain from x to the point y, or leaving toward the direction
+// y (to_infinity). Relative indices from the chain's dielectrics at `lambda_nm`.
+// Planar-parallel chains take the closed form, others the manifold solver.
+// nullopt when no path is found (or the chain holds a sphere).
 std::optional<RefractedPath> solve_refracted_path(const Scene& scene, const SpecularChain& chain, const Vec3& x,
                                                   const Vec3& y, bool to_infinity, float lambda_nm);
+// The manifold solver alone (any chain of mesh or box faces; tests compare it
+// with the closed form on planar chains).
+std::optional<RefractedPath> solve_manifold_path(const Scene& scene, const SpecularChain& chain, const Vec3& x,
+                                                 const Vec3& y, bool to_infinity, float lambda_nm);
+// Relative index n_i of every layer (n_0 = 1 at x): entering a face (the
+// straight line against its outward normal) multiplies by its IOR.
+std::array<double, kMaxSpecularChain + 1> chain_indices(const Scene& scene, const SpecularChain& chain,
+                                                        const Vec3& toward, float lambda_nm);
+
+// A path a continuation walked from x at λ (dielectric transmissions at
+// `walked`, then the area light at y): true when the connection produces it.
+bool connection_owns(const Scene& scene, const Vec3& x, const Vec3& y, const SpecularChain& walked, float lambda_nm);
 
 // Fluence-rate estimate at x (one wavelength: wl.count() == 1) from one light
 // through the dielectric chain seeded by the straight line to one light sample
 // (area lights: a point uniform by area from `u`):  L · Π(1 − R_i) · T_media ·
 // (n_x / n_light)² · dω/dA_⊥ · |cos θ_light| / pdf_A, or the delta lights'
-// equivalents. Zero when the path is blocked or the chain is not one it solves.
-// Environment lights are not handled (returns nullopt: the caller falls back).
+// equivalents (R_i at the shading normal, as the path tracer refracts). Zero
+// when the path is blocked or no path is found. Environment lights are not handled (returns nullopt: the caller falls back).
 std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3& x, int medium, int light_index,
                                                  Point2 u, PreparedMedia& media, Rng& rng);
 

@@ -309,3 +309,41 @@ TEST(GeometryScene, AnalyticBoxRejectsEmptyOrNonFiniteBoxes) {
   EXPECT_THROW(scene.add_box({{0, 0, 0}, {1, 0, 1}}), std::invalid_argument);
   EXPECT_THROW(scene.add_box({{0, 0, 0}, {1, std::nanf(""), 1}}), std::invalid_argument);
 }
+
+TEST(GeometryScene, SurfacePatchReproducesHits) {
+  // The patch under a hit holds the hit point on its plane and interpolates the
+  // hit's shading normal (barycentrics of the point); box faces are their plane
+  // with the face normal; spheres have no patch.
+  GeometryScene scene;
+  const int sphere_mesh = scene.add_mesh(make_uv_sphere(Vec3(0.f), 1.f, 12, 24));
+  const int box = scene.add_box(Bounds3{Vec3(2.f, -1.f, -1.f), Vec3(3.f, 1.f, 1.f)});
+  const int sphere = scene.add_sphere(Vec3(-4.f, 0.f, 0.f), 1.f);
+  scene.commit();
+  EXPECT_FALSE(scene.surface_patch(sphere, 0));
+  Rng rng(test_seed(3), 0);
+  for (int i = 0; i < 200; ++i) {
+    const Vec3 d = normalize(Vec3(rng.uniform() - 0.5f, rng.uniform() - 0.5f, rng.uniform() - 0.5f));
+    const auto hit = scene.intersect(Ray{Vec3(0.f), d}, 1.5f);
+    ASSERT_TRUE(hit);
+    ASSERT_EQ(hit->shape_id, sphere_mesh);
+    const auto patch = scene.surface_patch(hit->shape_id, hit->prim_id);
+    ASSERT_TRUE(patch);
+    expect_near(patch->ng, hit->ng, 1e-5f);
+    const Vec3 e1 = patch->p[1] - patch->p[0], e2 = patch->p[2] - patch->p[0], r = hit->p - patch->p[0];
+    EXPECT_NEAR(dot(r, patch->ng), 0.f, 1e-5f);
+    const float e11 = dot(e1, e1), e12 = dot(e1, e2), e22 = dot(e2, e2), det = e11 * e22 - e12 * e12;
+    const float b1 = (e22 * dot(r, e1) - e12 * dot(r, e2)) / det, b2 = (e11 * dot(r, e2) - e12 * dot(r, e1)) / det;
+    const Vec3 n = normalize((1.f - b1 - b2) * patch->n[0] + b1 * patch->n[1] + b2 * patch->n[2]);
+    expect_near(n, hit->ns, 1e-4f);
+    EXPECT_FALSE(scene.flat_face(hit->shape_id, hit->prim_id));
+  }
+  const auto hit = scene.intersect(Ray{Vec3(1.5f, 0.2f, 0.3f), Vec3(1.f, 0.f, 0.f)}, 10.f);
+  ASSERT_TRUE(hit);
+  ASSERT_EQ(hit->shape_id, box);
+  const auto patch = scene.surface_patch(box, hit->prim_id);
+  ASSERT_TRUE(patch);
+  expect_near(patch->ng, Vec3(-1.f, 0.f, 0.f), 0.f);
+  for (const Vec3& p : patch->p) EXPECT_EQ(p.x, 2.f);
+  for (const Vec3& n : patch->n) expect_near(n, patch->ng, 0.f);
+  EXPECT_TRUE(scene.flat_face(box, hit->prim_id));
+}

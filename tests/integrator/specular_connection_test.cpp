@@ -9,7 +9,9 @@
 #include <functional>
 
 #include "core/sampling.h"
+#include "materials/bsdf.h"
 #include "test_scenes.h"
+#include "test_seed.h"
 
 namespace chlorovdb::test {
 namespace {
@@ -94,9 +96,11 @@ TEST(SpecularConnection, GeometryTermMatchesFiniteDifferences) {
 
 // A glass wall (outer face x = 2.2 cm, inner x = 2 cm) of a huge cuvette; the
 // solution absorbs at 420 nm (μ_a = 100 ln10 · 20000 · 5e-6 ≈ 23 /m); x at the origin.
-std::string wall_scene(const std::string& light) {
+// Everything but the shapes: a dye absorbing 380-480 nm in a solution, glass, and the
+// glass-to-solution interface; `fluorescence` mode, excitation through glass = connect.
+std::string dye_scene_head(const std::string& fluorescence) {
   return R"({
-  "render": {"resolution": [4, 4], "spp": 1, "wavelengths": 1, "fluorescence": "direct",
+  "render": {"resolution": [4, 4], "spp": 1, "wavelengths": 1, "fluorescence": ")" + fluorescence + R"(",
              "excitation_through_glass": "connect"},
   "camera": {"type": "orthographic", "position": [0, 0, 2], "look_at": [0, 0, 0], "height": 0.01},
   "pigments": {"dye": {"extinction": {"table": {"lambda": [379.999, 380, 480, 480.001], "value": [0, 20000, 20000, 0]}},
@@ -105,7 +109,11 @@ std::string wall_scene(const std::string& light) {
                 "glass_to_solution": {"type": "dielectric", "ior": 0.8913}},
   "media": {"solution": {"solvent": "none", "pigments": [{"pigment": "dye", "concentration": 5, "unit": "uM"}]}},
   "shapes": [
-    {"type": "box", "min": [-1, -1, -1], "max": [0.022, 1, 1], "material": "glass"},
+)";
+}
+
+std::string wall_scene(const std::string& light) {
+  return dye_scene_head("direct") + R"(    {"type": "box", "min": [-1, -1, -1], "max": [0.022, 1, 1], "material": "glass"},
     {"type": "box", "min": [-0.98, -0.98, -0.98], "max": [0.02, 0.98, 0.98], "material": "glass_to_solution",
      "inside": "solution"})" + light + "}";
 }
@@ -192,8 +200,8 @@ TEST(SpecularConnection, AreaLightThroughWallMatchesForwardRefraction) {
 }
 
 TEST(SpecularConnection, ContinuationThroughWallIsOwned) {
-  // The straight line's chain decides: a walk through the same two faces is
-  // owned; one through another face (or with a face left out) is not.
+  // The solve from the straight line decides: a walk through the solved
+  // vertices is owned; one with a vertex elsewhere (or a face left out) is not.
   const Scene scene = load_scene(write_scene("connect_owns", wall_scene(R"(,
     {"type": "quad", "corner": [0.3, -0.05, 0.05], "edge_u": [0, 0.1, 0], "edge_v": [0, 0, -0.1],
      "emission": {"spectrum": {"gaussian": [420, 8]}, "scale": 5}}])")));
@@ -202,13 +210,18 @@ TEST(SpecularConnection, ContinuationThroughWallIsOwned) {
   ASSERT_TRUE(chain);
   ASSERT_EQ(chain->count, 2);
   EXPECT_TRUE(chain->planar_parallel);
-  EXPECT_TRUE(connection_owns(scene, x, y, *chain));
-  SpecularChain shorter = *chain;
+  const auto path = solve_refracted_path(scene, *chain, x, y, false, kLambda);
+  ASSERT_TRUE(path);
+  SpecularChain walked = *chain;
+  for (int j = 0; j < 2; ++j) walked.faces[j] = path->face[j];
+  EXPECT_TRUE(connection_owns(scene, x, y, walked, kLambda));
+  EXPECT_FALSE(connection_owns(scene, x, y, *chain, kLambda)) << "the straight line's crossings are not the path";
+  SpecularChain shorter = walked;
   shorter.count = 1;
-  EXPECT_FALSE(connection_owns(scene, x, y, shorter));
-  SpecularChain other = *chain;
-  other.faces[1].offset += 0.01f;
-  EXPECT_FALSE(connection_owns(scene, x, y, other));
+  EXPECT_FALSE(connection_owns(scene, x, y, shorter, kLambda));
+  SpecularChain other = walked;
+  other.faces[1].p.y += 0.01f;
+  EXPECT_FALSE(connection_owns(scene, x, y, other, kLambda));
 }
 
 }  // namespace
@@ -216,6 +229,44 @@ TEST(SpecularConnection, ContinuationThroughWallIsOwned) {
 
 namespace chlorovdb::test {
 namespace {
+
+// Fluence at x from light 0 three ways: every continuation path (what `full`
+// mode's continuation does: uniform directions, emitters skipped on the first
+// segment; exact with excitation rays that stop at glass), the continuations
+// the connection does not own, and the connection itself.
+struct PartitionEstimates {
+  Estimate all, rest, connect;
+  double sigma() const {
+    return std::sqrt(all.sigma() * all.sigma() + rest.sigma() * rest.sigma() + connect.sigma() * connect.sigma());
+  }
+};
+PartitionEstimates partition_estimates(const Scene& scene, const Vec3& x, int paths, int connections, uint64_t seed) {
+  Rng rng(test_seed(seed), 0);
+  PathStats stats;
+  auto continuation = [&](bool drop_owned) {
+    Estimate e;
+    PathOptions options;
+    options.skip_emitters_on_first_segment = true;
+    options.skip_emitters_the_connection_owns = drop_owned;
+    for (int i = 0; i < paths; ++i) {
+      SampledWavelengths wl = SampledWavelengths::single(kLambda);
+      const Vec3 w = sample_uniform_sphere(Point2{rng.uniform(), rng.uniform()});
+      const PathRadiance L = trace_path_from(scene, Ray{x, w}, 0, wl, rng, stats, options);
+      e.add(double(L.other[0] + L.fluorescence[0]) * 4 * kPi);
+    }
+    return e;
+  };
+  PartitionEstimates p;
+  p.all = continuation(false);
+  p.rest = continuation(true);
+  SampledWavelengths wl = SampledWavelengths::single(kLambda);
+  PreparedMedia media(scene, wl);
+  for (int i = 0; i < connections; ++i)
+    p.connect.add(*connect_through_dielectrics(scene, x, 0, 0, Point2{rng.uniform(), rng.uniform()}, media, rng));
+  std::printf("fluence: all paths %.5g ± %.2g, not owned %.5g ± %.2g, connection %.5g ± %.2g\n", p.all.mean(),
+              p.all.sigma(), p.rest.mean(), p.rest.sigma(), p.connect.mean(), p.connect.sigma());
+  return p;
+}
 
 TEST(SpecularConnection, PartitionWithContinuationsCountsEachPathOnce) {
   // Fluence at x by paths in uniform directions (what `full` mode's
@@ -225,35 +276,247 @@ TEST(SpecularConnection, PartitionWithContinuationsCountsEachPathOnce) {
   const Scene scene = load_scene(write_scene("connect_partition", wall_scene(R"(,
     {"type": "quad", "corner": [0.3, -0.1, 0.1], "edge_u": [0, 0.2, 0], "edge_v": [0, 0, -0.2],
      "emission": {"spectrum": {"gaussian": [420, 8]}, "scale": 5}}])")));
-  Rng rng(11, 0);
-  PathStats stats;
-  auto continuation = [&](bool drop_owned) {
-    Estimate e;
-    PathOptions options;
-    options.skip_emitters_on_first_segment = true;
-    options.skip_emitters_the_connection_owns = drop_owned;
-    for (int i = 0; i < 400000; ++i) {
-      SampledWavelengths wl = SampledWavelengths::single(kLambda);
-      const Vec3 w = sample_uniform_sphere(Point2{rng.uniform(), rng.uniform()});
-      const PathRadiance L = trace_path_from(scene, Ray{Vec3(0.f), w}, 0, wl, rng, stats, options);
-      e.add(double(L.other[0] + L.fluorescence[0]) * 4 * kPi);
+  const PartitionEstimates p = partition_estimates(scene, Vec3(0.f), 400000, 100000, 11);
+  EXPECT_NEAR(p.all.mean(), p.rest.mean() + p.connect.mean(), 4 * p.sigma());
+  EXPECT_GT(p.connect.mean(), 10 * p.sigma());
+  EXPECT_LT(p.rest.mean(), 0.5 * p.all.mean());
+  EXPECT_LT(p.all.sigma(), 0.05 * p.all.mean());
+}
+
+}  // namespace
+}  // namespace chlorovdb::test
+
+// ---- Manifold solver: curved and smooth-shaded mesh glass ----
+namespace chlorovdb::test {
+namespace {
+
+// A smooth-shaded latitude/longitude sphere (vertex normals) as an OBJ file.
+std::string write_smooth_sphere(const std::string& name, float radius) {
+  const TriangleMesh mesh = make_uv_sphere(Vec3(0.f), radius, 24, 48);
+  const auto path = scratch_dir("integrator_tests") / (name + ".obj");
+  std::ofstream out(path);
+  out.precision(9);
+  for (const Vec3& p : mesh.positions) out << "v " << p.x << ' ' << p.y << ' ' << p.z << '\n';
+  for (const Vec3& n : mesh.normals) out << "vn " << n.x << ' ' << n.y << ' ' << n.z << '\n';
+  for (int t = 0; t < mesh.triangle_count(); ++t) {
+    out << 'f';
+    for (int k = 0; k < 3; ++k) out << ' ' << mesh.indices[3 * t + k] + 1 << "//" << mesh.indices[3 * t + k] + 1;
+    out << '\n';
+  }
+  return path.string();
+}
+
+// A round flask: 5 mm glass around 4.5 cm of pigment solution, both smooth-shaded meshes.
+std::string flask_scene(const std::string& light) {
+  return dye_scene_head("full") + R"(    {"type": "mesh", "file": ")" + write_smooth_sphere("flask_glass", 0.05f) + R"(", "material": "glass"},
+    {"type": "mesh", "file": ")" + write_smooth_sphere("flask_solution", 0.045f) + R"(", "material": "glass_to_solution",
+     "inside": "solution"})" + light + "}";
+}
+const std::string kFlaskPanel = R"(,
+    {"type": "quad", "corner": [0.3, -0.1, 0.1], "edge_u": [0, 0.2, 0], "edge_v": [0, 0, -0.2],
+     "emission": {"spectrum": {"gaussian": [420, 8]}, "scale": 5}}])";
+const Vec3 kInFlask(0.012f, 0.007f, -0.004f);
+
+TEST(SpecularManifold, AgreesWithThePlanarClosedForm) {
+  // The general solver on a chain of two parallel box faces: the same vertices
+  // and geometry term as Snell's-invariant closed form, for finite and distant ends.
+  const Scene scene = load_scene(write_scene("manifold_planar", wall_scene("]")));
+  const Vec3 x(0.f);
+  int compared = 0;
+  for (const Vec3 y : {Vec3(0.3f, 0.f, 0.f), Vec3(0.3f, 0.01f, 0.02f), Vec3(0.25f, -0.2f, 0.1f), Vec3(0.1f, 0.15f, -0.12f)})
+    for (const bool to_infinity : {false, true}) {
+      const auto chain = straight_line_chain(scene, x, y, to_infinity);
+      ASSERT_TRUE(chain);
+      ASSERT_TRUE(chain->planar_parallel);
+      const auto closed = solve_refracted_path(scene, *chain, x, y, to_infinity, kLambda);
+      const auto manifold = solve_manifold_path(scene, *chain, x, y, to_infinity, kLambda);
+      ASSERT_EQ(bool(closed), bool(manifold)) << "y " << y.x << ' ' << y.y << ' ' << y.z << " to_infinity " << to_infinity;
+      if (!closed) continue;
+      ++compared;
+      ASSERT_EQ(manifold->count, 2);
+      for (int j = 0; j < 2; ++j) {
+        EXPECT_LE(length(manifold->face[j].p - closed->face[j].p), 1e-6f * length(y)) << "vertex " << j;
+        EXPECT_EQ(manifold->face[j].shape_id, closed->face[j].shape_id);
+      }
+      for (int j = 0; j <= 2; ++j) EXPECT_LT(length(manifold->dir[j] - closed->dir[j]), 1e-6f) << "leg " << j;
+      EXPECT_NEAR(manifold->geometry / closed->geometry, 1.0, 1e-6) << "to_infinity " << to_infinity;
     }
-    return e;
-  };
-  const Estimate all = continuation(false), rest = continuation(true);
-  Estimate connect;
+  EXPECT_GE(compared, 6);
+}
+
+// Unit direction of the solved path's first leg from x toward the light point y.
+std::optional<Vec3> start_direction(const Scene& scene, const Vec3& x, const Vec3& y) {
+  const auto chain = straight_line_chain(scene, x, y, false);
+  if (!chain) return std::nullopt;
+  const auto path = solve_refracted_path(scene, *chain, x, y, false, kLambda);
+  if (!path) return std::nullopt;
+  return path->dir[0];
+}
+
+TEST(SpecularManifold, SmoothSphereGeometryTermMatchesFiniteDifferences) {
+  // dω_0/dA_⊥ against central differences of the start direction when y moves
+  // by ±δ along two axes perpendicular to the last leg (solid angle = |∂ω/∂a × ∂ω/∂b|).
+  const Scene scene = load_scene(write_scene("manifold_fd", flask_scene("]")));
+  for (const Vec3 y : {Vec3(0.3f, 0.f, 0.f), Vec3(0.3f, 0.05f, -0.03f), Vec3(0.2f, 0.15f, 0.1f), Vec3(-0.1f, 0.05f, 0.25f)}) {
+    const auto chain = straight_line_chain(scene, kInFlask, y, false);
+    ASSERT_TRUE(chain);
+    ASSERT_EQ(chain->count, 2);
+    EXPECT_FALSE(chain->planar_parallel);
+    const auto path = solve_refracted_path(scene, *chain, kInFlask, y, false, kLambda);
+    ASSERT_TRUE(path) << "y " << y.x << ' ' << y.y << ' ' << y.z;
+    // Snell at the shading normals: η_a w_a + η_b w_b has no tangential part.
+    for (int j = 0; j < 2; ++j) {
+      const Vec3 h = float(path->n[j]) * -path->dir[j] + float(path->n[j + 1]) * path->dir[j + 1];
+      const Vec3 tangential = h - path->ns[j] * dot(h, path->ns[j]);
+      EXPECT_LT(length(tangential), 1e-5f) << "vertex " << j;
+      EXPECT_LT(std::fabs(length(path->face[j].p) - (j == 0 ? 0.045f : 0.05f)), 2e-4f) << "on the mesh";
+    }
+    const Frame frame = Frame::from_z(path->dir[2]);
+    // Small enough that y's neighbours keep x_1, x_2 on their triangles (the
+    // interpolated normals' derivatives jump across edges), large against float rounding.
+    const float delta = 2e-4f;
+    std::array<Vec3, 2> d_omega;
+    for (int q = 0; q < 2; ++q) {
+      const Vec3 e = q == 0 ? frame.s : frame.t;
+      const auto plus = start_direction(scene, kInFlask, y + e * delta);
+      const auto minus = start_direction(scene, kInFlask, y - e * delta);
+      ASSERT_TRUE(plus && minus);
+      d_omega[q] = (*plus - *minus) / (2 * delta);
+    }
+    const double fd = length(cross(d_omega[0], d_omega[1]));
+    EXPECT_NEAR(path->geometry / fd, 1.0, 2e-3) << "y " << y.x << ' ' << y.y << ' ' << y.z;
+    std::printf("geometry term %.6g, finite differences %.6g\n", path->geometry, fd);
+  }
+}
+
+TEST(SpecularManifold, SmoothFlaskConnectionPartitionsContinuationsExactly) {
+  // Fluence at a point inside a round flask (two smooth-shaded mesh
+  // interfaces) from a panel: all continuation paths (full + block, exact)
+  // against the ones the connection does not own plus the connection. Agreement
+  // within 4σ; the connection carries most of it (so a double count, or
+  // dropping paths it does not produce, is many σ away).
+  const Scene scene = load_scene(write_scene("manifold_partition", flask_scene(kFlaskPanel)));
+  const PartitionEstimates p = partition_estimates(scene, kInFlask, 300000, 100000, 23);
+  EXPECT_NEAR(p.all.mean(), p.rest.mean() + p.connect.mean(), 4 * p.sigma());
+  EXPECT_GT(p.connect.mean(), 10 * p.sigma());
+  EXPECT_LT(p.rest.mean(), 0.3 * p.all.mean());
+  EXPECT_LT(p.all.sigma(), 0.05 * p.all.mean());
+}
+
+TEST(SpecularManifold, SpotLightThroughSmoothFlaskMatchesASmallDisk) {
+  // A spot light behind curved glass has no other strategy; its connection must
+  // equal the limit of a small area light of the same intensity toward x (disk
+  // of radius 2 mm, I = Le · A · cos θ), whose connection the partition test
+  // checks against continuations. The spot's edge (cone 30°, falloff 10°) is
+  // placed so x sees it partly dimmed.
+  const Vec3 p_light(0.3f, 0.05f, -0.03f);
+  const Scene scene = load_scene(write_scene("manifold_spot", flask_scene(R"(,
+    {"type": "disk", "center": [0.3, 0.05, -0.03], "normal": [-1, -0.15, 0.1], "radius": 0.002,
+     "emission": {"spectrum": {"gaussian": [420, 8]}, "scale": 5}}],
+  "lights": [{"type": "spot", "position": [0.3, 0.05, -0.03], "look_at": [0.05, -0.09, 0.04], "cone_angle": 30,
+              "falloff_angle": 10, "spectrum": {"gaussian": [420, 8]}, "scale": 2e-5}])")));
+  ASSERT_EQ(scene.lights.size(), 2u);
   SampledWavelengths wl = SampledWavelengths::single(kLambda);
   PreparedMedia media(scene, wl);
-  for (int i = 0; i < 100000; ++i)
-    connect.add(*connect_through_dielectrics(scene, Vec3(0.f), 0, 0, Point2{rng.uniform(), rng.uniform()}, media, rng));
-  const double sigma = std::sqrt(all.sigma() * all.sigma() + rest.sigma() * rest.sigma() + connect.sigma() * connect.sigma());
-  EXPECT_NEAR(all.mean(), rest.mean() + connect.mean(), 4 * sigma)
-      << "all " << all.mean() << " ± " << all.sigma() << ", rest " << rest.mean() << " ± " << rest.sigma()
-      << ", connect " << connect.mean() << " ± " << connect.sigma();
-  std::printf("fluence: all paths %.5g ± %.2g, not owned %.5g ± %.2g, connection %.5g ± %.2g\n", all.mean(),
-              all.sigma(), rest.mean(), rest.sigma(), connect.mean(), connect.sigma());
-  EXPECT_LT(rest.mean(), 0.5 * all.mean());
-  EXPECT_LT(all.sigma(), 0.05 * all.mean());
+  Rng rng(test_seed(5), 0);
+  const auto spot = connect_through_dielectrics(scene, kInFlask, 0, 1, Point2{0.5f, 0.5f}, media, rng);
+  ASSERT_TRUE(spot);
+  ASSERT_GT(*spot, 0.f);
+  Estimate disk;
+  for (int i = 0; i < 20000; ++i)
+    disk.add(*connect_through_dielectrics(scene, kInFlask, 0, 0, Point2{rng.uniform(), rng.uniform()}, media, rng));
+  const auto chain = straight_line_chain(scene, kInFlask, p_light, false);
+  ASSERT_TRUE(chain);
+  const auto path = solve_refracted_path(scene, *chain, kInFlask, p_light, false, kLambda);
+  ASSERT_TRUE(path);
+  const float falloff = spot_falloff(std::get<SpotLight>(scene.lights[1]), -path->dir[2]);
+  EXPECT_GT(falloff, 0.05f);
+  EXPECT_LT(falloff, 0.95f);
+  const double cos_disk = std::fabs(dot(normalize(Vec3(-1.f, -0.15f, 0.1f)), path->dir[2]));
+  const double expected_ratio = 2e-5 * falloff / (5 * scene.geometry.area(2) * cos_disk);
+  EXPECT_NEAR(*spot / disk.mean(), expected_ratio, (4 * disk.sigma() / disk.mean() + 1e-3) * expected_ratio)
+      << "spot " << *spot << ", disk " << disk.mean() << " ± " << disk.sigma();
+}
+
+
+// Energy share of transmission-only paths the solver does not find: from points
+// inside a vessel's liquid, uniform directions refracted forward through the
+// glass by the path tracer's own dielectric (transmission forced, weight
+// Π(1 − R)) to where they leave (an opaque surface, or 10 m out when they
+// escape); a path counts as found when the solve seeded by the straight line
+// to that end point returns it (connection_owns). For a delta light the share
+// not found is missing energy; for area lights continuations carry it.
+// Measured (docs/fluorescence.md): flask 1.3 %, beaker 12.7 %, teapot 13.2 %,
+// mostly straight lines that cross another number of faces than the path.
+struct MissedShare {
+  double missed = 0, total = 0;
+  long paths = 0;
+};
+MissedShare transmission_paths_missed(const Scene& scene, int liquid_shape, float depth, int points, uint64_t seed) {
+  Rng rng(test_seed(seed), 0);
+  MissedShare share;
+  SampledWavelengths wl = SampledWavelengths::single(kLambda);
+  for (int i = 0; i < points; ++i) {
+    const ShapeSample ss = scene.geometry.sample_area(liquid_shape, Point2{rng.uniform(), rng.uniform()});
+    const Vec3 x = ss.p - ss.n * (depth * (0.1f + 0.9f * rng.uniform()));
+    Ray ray{x, sample_uniform_sphere(Point2{rng.uniform(), rng.uniform()})};
+    SpecularChain walked;
+    double weight = 1;
+    std::optional<Vec3> end;
+    for (int crossings = 0; crossings < 64 && walked.count <= kMaxSpecularChain; ++crossings) {
+      const auto hit = scene.geometry.intersect(ray, kInfinity);
+      if (!hit) {
+        end = ray.o + ray.d * 10.f;
+        break;
+      }
+      const ShapeBinding& b = scene.shapes[hit->shape_id];
+      if (is_pass_through(scene, b)) {
+        ray = scene.geometry.spawn_ray(*hit, ray.d);
+        continue;
+      }
+      if (!std::holds_alternative<Dielectric>(scene.materials[b.material])) {
+        end = hit->p;
+        break;
+      }
+      const Bsdf bsdf = make_bsdf(scene.materials[b.material], *hit, wl);
+      const auto bs = bsdf.sample(-ray.d, 1.f - 1e-7f, Point2{0.5f, 0.5f});
+      if (!bs || !bs->is_transmission || walked.count == kMaxSpecularChain) break;  // total internal reflection
+      weight *= bs->f[0] * std::fabs(dot(bs->wi, hit->ns)) * bs->eta * bs->eta;  // 1 − R
+      walked.faces[walked.count++] = ChainFace{hit->shape_id, hit->prim_id, hit->ng, dot(hit->ng, hit->p), hit->p};
+      ray = scene.geometry.spawn_ray(*hit, bs->wi);
+    }
+    if (!end || walked.count == 0) continue;
+    ++share.paths;
+    share.total += weight;
+    if (!connection_owns(scene, x, *end, walked, kLambda)) share.missed += weight;
+  }
+  return share;
+}
+
+TEST(SpecularManifold, FindsTheTransmissionPathsOfVesselGlass) {
+  struct Vessel {
+    std::string name;
+    Scene scene;
+    float depth;   // x lies up to this far inside the liquid's surface, metres
+    double bound;  // the missed share must stay below this
+  };
+  const auto source = std::filesystem::path(CHLOROVDB_SOURCE_DIR) / "scenes";
+  std::vector<Vessel> vessels;
+  vessels.push_back({"smooth flask", load_scene(write_scene("manifold_missed", flask_scene("]"))), 0.02f, 0.03});
+  vessels.push_back({"beaker", load_scene(source / "glass_UVB_5uM_Q0.23.json"), 0.01f, 0.2});
+  vessels.push_back({"teapot", load_scene(source / "teapot_50uM_D65_UVB_aim2.json"), 0.01f, 0.2});
+  for (const Vessel& v : vessels) {
+    int liquid = -1;
+    for (size_t s = 0; s < v.scene.shapes.size(); ++s)
+      if (v.scene.shapes[s].medium_inside >= 0 && v.scene.shapes[s].material >= 0) liquid = int(s);
+    ASSERT_GE(liquid, 0) << v.name;
+    const MissedShare share = transmission_paths_missed(v.scene, liquid, v.depth, 20000, 29);
+    const double missed = share.missed / share.total;
+    std::printf("%s: %ld transmission-only paths, energy share not found by the solver %.4f\n", v.name.c_str(),
+                share.paths, missed);
+    EXPECT_GT(share.paths, 2000) << v.name;
+    EXPECT_LT(missed, v.bound) << v.name;
+  }
 }
 
 }  // namespace
