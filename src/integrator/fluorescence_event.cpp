@@ -125,7 +125,7 @@ float direct_excitation(const Scene& scene, const FluorescentPigment& fp, const 
   *lambda_excitation = lp;
   SampledWavelengths wl = SampledWavelengths::single(lp);
   const Point2 u_light{rng.uniform(), rng.uniform()};
-  if (scene.settings.excitation_connect) {
+  if (scene.settings.excitation_through_glass == ExcitationThroughGlass::connect) {
     PreparedMedia media(scene, wl);
     if (const auto fluence = connect_through_dielectrics(scene, x, medium, pick->index, u_light, media, rng)) {
       ++stats.excitation_rays;
@@ -142,7 +142,8 @@ float direct_excitation(const Scene& scene, const FluorescentPigment& fp, const 
   // glass to area and environment lights exactly, so for those the excitation
   // ray must stop at glass or that light would be counted twice.
   const bool continuations_reach_light = scene.settings.fluorescence == FluorescenceMode::full && !ls->is_delta;
-  const DielectricCrossing glass = scene.settings.excitation_through_glass && !continuations_reach_light
+  const DielectricCrossing glass =
+      scene.settings.excitation_through_glass == ExcitationThroughGlass::fresnel && !continuations_reach_light
                                        ? DielectricCrossing::straight_through_fresnel
                                        : DielectricCrossing::block;
   ConnectionOptions options;
@@ -181,7 +182,7 @@ float indirect_excitation(const Scene& scene, const FluorescentPigment& fp, cons
   const Vec3 w = sample_uniform_sphere(Point2{rng.uniform(), rng.uniform()});
   PathOptions options;
   options.skip_emitters_on_first_segment = true;
-  options.skip_emitters_the_connection_owns = scene.settings.excitation_connect;
+  options.skip_emitters_the_connection_owns = scene.settings.excitation_through_glass == ExcitationThroughGlass::connect;
   options.fluorescence_depth = depth + 1;
   const PathRadiance sub = trace_path_from(scene, Ray{x, w}, medium, wl, rng, stats, options);
   const float radiance = sub.fluorescence[0] + sub.other[0];
@@ -286,11 +287,13 @@ SampledSpectrum reference_fluorescence_event(const Scene& scene, const Vec3& p, 
   ++stats.excitation_rays;
   // One free-path test toward the light: a 0/1 transmittance estimate. "An opaque
   // surface" stops it (thesis Ch. 4); glass does not, or a solution in a glass would
-  // never fluoresce, unlike the thesis's own images: it crosses as our estimators'
-  // excitation rays do (render.excitation_through_glass).
+  // never fluoresce, unlike the thesis's own images: it crosses straight with
+  // Fresnel transmission, unless render.excitation_through_glass is "block" (the
+  // thesis's estimator has no refracted connection).
   PreparedMedia media(scene, wl);
-  const DielectricCrossing glass =
-      scene.settings.excitation_through_glass ? DielectricCrossing::straight_through_fresnel : DielectricCrossing::block;
+  const DielectricCrossing glass = scene.settings.excitation_through_glass == ExcitationThroughGlass::block
+                                       ? DielectricCrossing::block
+                                       : DielectricCrossing::straight_through_fresnel;
   ConnectionOptions options;
   options.dielectrics = glass;
   options.forced = TransmittanceEstimator::delta;

@@ -32,6 +32,14 @@ inline const char* to_string(FluorescenceMode m) {
 // The quantum yield Q of an event in `direct`/`full` mode: a factor on its
 // contribution, or a roulette (fluorescence with probability Q, weight 1).
 enum class QuantumYieldMode { weight, roulette };
+// Excitation rays meeting smooth glass (docs/fluorescence.md):
+//  connect — solve for the refracted path through up to 4 glass faces to every
+//            light kind (integrator/specular_connection.h); exact with `full`
+//            and area lights, delta lights miss the paths the solver misses;
+//  fresnel — cross straight with Fresnel transmission (thin-wall approximation);
+//  block   — stop (exact with `full`: light through glass then arrives only by
+//            continuation paths, which cannot reach delta lights).
+enum class ExcitationThroughGlass { connect, fresnel, block };
 
 struct RenderSettings {
   int width = 512, height = 512;
@@ -52,15 +60,7 @@ struct RenderSettings {
   // transmittance, non-fluorescent pigments, lights dark in an excitation band,
   // paths carrying no emission wavelength). Off only to measure each skip.
   bool skip_unneeded_work = true;
-  // Excitation rays meeting smooth glass: cross it straight with Fresnel
-  // transmission (thin-wall approximation, lets delta lights excite liquid in a
-  // vessel), or stop (exact; light through glass then arrives only by `full`
-  // mode's continuation paths, which cannot reach delta lights). docs/fluorescence.md.
-  bool excitation_through_glass = true;
-  // "connect": excitation rays solve for the refracted path through parallel
-  // planar glass to point, spot, distant and area lights (integrator/
-  // specular_connection.h); anything else through glass is stopped, as "block".
-  bool excitation_connect = false;
+  ExcitationThroughGlass excitation_through_glass = ExcitationThroughGlass::connect;
   // Both kept to measure what the defaults buy (docs/fluorescence.md); neither
   // applies to the `reference` estimator, which always draws λ' uniformly below
   // λ and uses Q as a roulette, as the thesis does.

@@ -98,9 +98,10 @@ RenderSettings read_render_settings(ParamReader& top, const SceneOverrides& o, s
       s.aovs = read_aov_names(names, [&](const std::string& problem) { r->fail("aovs", problem); });
     }
     s.skip_unneeded_work = r->get_bool("skip_unneeded_work", true);
-    const std::string glass = r->get_enum("excitation_through_glass", "fresnel", {"fresnel", "block", "connect"});
-    s.excitation_through_glass = glass == "fresnel";
-    s.excitation_connect = glass == "connect";
+    const std::string glass = r->get_enum("excitation_through_glass", "connect", {"connect", "fresnel", "block"});
+    s.excitation_through_glass = glass == "fresnel" ? ExcitationThroughGlass::fresnel
+                                 : glass == "block" ? ExcitationThroughGlass::block
+                                                    : ExcitationThroughGlass::connect;
     s.excitation_sampling = r->get_enum("excitation_sampling", "importance", {"importance", "uniform"}) == "uniform"
                                 ? ExcitationSampling::uniform
                                 : ExcitationSampling::importance;
