@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
-# Fuzz the scene loader and the spectrum CSV reader with libFuzzer (issue 7).
+# Fuzz the scene loader, the spectrum CSV reader and the mesh / height-field
+# loaders with voxelize behind them, with libFuzzer.
 #
-#   tools/fuzz.sh [--seconds N] [--target scene|csv|all] [--jobs J] [--keep-going] [--build-dir DIR] [--no-build]
+#   tools/fuzz.sh [--seconds N] [--target scene|csv|mesh|all] [--jobs J] [--keep-going] [--build-dir DIR] [--no-build]
 #
 # Configures a clang build with ASan + UBSan and -DCHLOROVDB_FUZZ=ON in DIR
 # (default build-fuzz), builds only the fuzz targets, then runs each target for
@@ -37,9 +38,9 @@ while [ $# -gt 0 ]; do
   esac
 done
 case "$target" in
-  all) targets=(scene csv) ;;
-  scene|csv) targets=("$target") ;;
-  *) echo "fuzz.sh: --target must be scene, csv or all" >&2; exit 2 ;;
+  all) targets=(scene csv mesh) ;;
+  scene|csv|mesh) targets=("$target") ;;
+  *) echo "fuzz.sh: --target must be scene, csv, mesh or all" >&2; exit 2 ;;
 esac
 
 cxx=$(command -v clang++ || command -v clang++-14 || true)
@@ -58,6 +59,7 @@ fi
 export CHLOROVDB_SPECTRA="$PWD/spectra"
 export ASAN_OPTIONS="${ASAN_OPTIONS:-detect_leaks=1:allocator_may_return_null=1}"
 export UBSAN_OPTIONS="${UBSAN_OPTIONS:-halt_on_error=1:print_stacktrace=1:suppressions=$PWD/fuzz/ubsan.supp}"
+export LSAN_OPTIONS="${LSAN_OPTIONS:-suppressions=$PWD/fuzz/lsan.supp}"
 status=0
 for t in "${targets[@]}"; do
   corpus="$build_dir/fuzz/corpus/$t"

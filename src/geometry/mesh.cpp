@@ -7,8 +7,11 @@
 #include <fmt/format.h>
 
 #include <array>
+#include <charconv>
 #include <cmath>
 #include <cstring>
+#include <fstream>
+#include <sstream>
 #include <unordered_map>
 
 #include "core/constants.h"
@@ -65,12 +68,97 @@ int repair_normals(TriangleMesh& mesh) {
   return repaired;
 }
 
+// Bytes of one PLY scalar type; 0 if the word is not one.
+int ply_type_size(const std::string& type) {
+  if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
+  if (type == "short" || type == "ushort" || type == "int16" || type == "uint16") return 2;
+  if (type == "int" || type == "uint" || type == "int32" || type == "uint32" || type == "float" || type == "float32")
+    return 4;
+  if (type == "double" || type == "float64") return 8;
+  return 0;
+}
+
+// Assimp 5.2's PLY reader trusts the header: without an end_header line it reads
+// past its buffer (a crash: upstream assimp#4843, fixed after 5.2.5), and it allocates
+// what the header declares before reading any data (4294967295 vertices in a
+// 200-byte file asked for 48 GB). So a file starting with "ply" is checked first:
+// every header line must be one the format defines, the header must end, and the
+// declared elements must fit in the bytes after it (binary: each instance takes its
+// scalar properties plus each list's count; ASCII: at least two bytes, a digit and
+// a separator, per property).
+void check_ply_header(const std::filesystem::path& file, const std::string& name) {
+  std::ifstream in(file, std::ios::binary);
+  std::string line;
+  if (!std::getline(in, line) || line.rfind("ply", 0) != 0) return;  // not a PLY file
+  const auto refuse = [&](int line_number, const std::string& problem) {
+    return InputError(name, fmt::format("PLY header line {}", line_number), line.substr(0, 80), problem);
+  };
+  if (line != "ply" && line != "ply\r") throw refuse(1, "the first line must be \"ply\"");
+  struct Element {
+    std::string name;
+    uint64_t count = 0;
+    uint64_t bytes_each = 0;
+  };
+  std::vector<Element> elements;
+  bool binary = false, has_format = false;
+  constexpr int kMaxHeaderLines = 10000;
+  for (int number = 2; number <= kMaxHeaderLines && std::getline(in, line); ++number) {
+    if (!line.empty() && line.back() == '\r') line.pop_back();
+    if (line.size() > 1000) throw refuse(number, "is longer than 1000 characters: not a PLY header line");
+    std::istringstream words(line);
+    std::string keyword, a, b, c, extra;
+    words >> keyword >> a >> b >> c;
+    if (keyword == "comment" || keyword == "obj_info") continue;
+    words >> extra;
+    if (keyword == "format") {
+      if (has_format || number != 2 || !(a == "ascii" || a == "binary_little_endian" || a == "binary_big_endian") ||
+          b != "1.0" || !c.empty())
+        throw refuse(number, "must be \"format ascii|binary_little_endian|binary_big_endian 1.0\" on line 2");
+      binary = a != "ascii";
+      has_format = true;
+    } else if (keyword == "element") {
+      Element e{a, 0, 0};
+      if (!has_format || a.empty() || !c.empty() ||
+          std::from_chars(b.data(), b.data() + b.size(), e.count).ec != std::errc() || b.empty())
+        throw refuse(number, "must be \"element NAME COUNT\" after the format line");
+      elements.push_back(e);
+    } else if (keyword == "property") {
+      const bool list = a == "list";
+      const int bytes = ply_type_size(list ? b : a);
+      const bool well_formed = list ? ply_type_size(c) > 0 && !extra.empty() : !b.empty() && c.empty();
+      if (elements.empty() || bytes == 0 || !well_formed)
+        throw refuse(number, "must be \"property TYPE NAME\" or \"property list COUNT_TYPE TYPE NAME\" after an element");
+      elements.back().bytes_each += binary ? uint64_t(bytes) : 2;  // an empty list is just its count
+    } else if (keyword == "end_header" && a.empty()) {
+      if (!has_format) throw refuse(number, "the header has no format line");
+      const uint64_t size = std::filesystem::file_size(file);
+      // An ASCII file's last value may lack its separator.
+      const uint64_t data = size - std::min<uint64_t>(size, uint64_t(in.tellg())) + (binary ? 0 : 1);
+      double needed = 0;  // in double: counts up to 2^64 times bytes cannot overflow
+      for (const Element& e : elements) {
+        needed += double(e.count) * double(e.bytes_each);
+        if (needed > double(data))
+          throw InputError(name, fmt::format("PLY element {}", e.name), fmt::format("{}", e.count),
+                           fmt::format("the header declares {} elements of at least {} bytes each, more than the "
+                                       "{} bytes of data after the header (truncated or corrupt file)",
+                                       e.count, e.bytes_each, data));
+      }
+      return;
+    } else {
+      throw refuse(number, "is not a PLY header line (format, element, property, comment, obj_info or end_header)");
+    }
+  }
+  throw InputError(name, "", "", fmt::format("the PLY header has no end_header line within {} lines", kMaxHeaderLines));
+}
+
 }  // namespace
 
 TriangleMesh load_mesh(const std::filesystem::path& file, MeshLoadInfo* info) {
   const std::string name = file.string();
   std::error_code ec;
   if (!std::filesystem::is_regular_file(file, ec)) throw InputError(name, "", "", "mesh file not found or not a file");
+
+  check_ply_header(file, name);
 
   Assimp::Importer importer;
   // Points and lines cannot bound anything: drop them instead of failing.

@@ -68,9 +68,31 @@ void check_vdb_complete(const std::filesystem::path& path) {
     if (version >= openvdb::OPENVDB_FILE_VERSION_GRID_INSTANCING) skip_string("a grid's instance parent");
     int64_t pos[3];  // grid, block, end
     read(pos, sizeof(pos), "a grid descriptor");
-    const uint64_t at = uint64_t(in.tellg());
-    if (pos[2] < 0 || uint64_t(pos[2]) > size || uint64_t(pos[2]) < at)
-      throw truncated(fmt::format("grid {} ends at offset {}", g, pos[2]));
+    const int64_t at = int64_t(in.tellg());
+    // The grid's header (compression, metadata, transform, topology) starts after its
+    // descriptor, its data blocks after that, and it ends within the file.
+    if (pos[2] < 0 || uint64_t(pos[2]) > size) throw truncated(fmt::format("grid {} ends at offset {}", g, pos[2]));
+    if (!(at <= pos[0] && pos[0] <= pos[1] && pos[1] <= pos[2]))
+      throw truncated(fmt::format("grid {}'s offsets are out of order: header at {}, data at {}, end at {}, after its "
+                                  "descriptor at {}", g, pos[0], pos[1], pos[2], at));
+    // Its metadata must lie inside its header: OpenVDB reads the count and the
+    // sizes as they come, so a corrupt count made it loop on for billions of entries.
+    in.seekg(pos[0]);
+    if (version >= openvdb::OPENVDB_FILE_VERSION_NODE_MASK_COMPRESSION) skip(4, "a grid's compression flags");
+    const uint64_t header_size = uint64_t(pos[1]);
+    const auto skip_in_header = [&](uint64_t n, const char* what) {
+      const uint64_t here = uint64_t(in.tellg());
+      if (n > header_size - std::min(header_size, here))
+        throw truncated(fmt::format("grid {}: {} of {} bytes at offset {} runs past the grid's header", g, what, n, here));
+      in.seekg(std::streamoff(here + n));
+    };
+    uint32_t entries = 0, n = 0;
+    read(&entries, 4, "a grid's metadata");
+    for (uint32_t i = 0; i < entries; ++i)
+      for (const char* what : {"a grid metadata name", "a grid metadata type", "a grid metadata value"}) {
+        read(&n, 4, what);
+        skip_in_header(n, what);
+      }
     in.seekg(pos[2]);
   }
 }
@@ -82,11 +104,24 @@ std::unique_ptr<openvdb::io::File> open_vdb(const std::filesystem::path& path) {
   check_vdb_complete(path);
   auto file = std::make_unique<openvdb::io::File>(path.string());
   try {
-    file->open();
+    // No delayed loading: every voxel is copied out at once anyway, and so every
+    // buffer is read, and a corrupt one fails, inside read_grid's error handling.
+    file->open(/*delayLoad=*/false);
   } catch (const openvdb::Exception& e) {
     throw InputError(path.string(), "", "", fmt::format("not a readable .vdb file ({})", e.what()));
   }
   return file;
+}
+
+// A corrupt grid that passes check_vdb_complete (a value, size or map name changed
+// inside it) makes OpenVDB throw: its own exceptions, or bad_alloc / length_error
+// for a garbage size. Nothing else happens in readGrid, so any exception is the file's.
+openvdb::GridBase::Ptr read_grid(openvdb::io::File& file, const std::string& file_name, const std::string& name) {
+  try {
+    return file.readGrid(name);
+  } catch (const std::exception& e) {
+    throw InputError(file_name, "grid", name, fmt::format("cannot be read: corrupt or truncated .vdb file ({})", e.what()));
+  }
 }
 
 // OpenVDB maps index to world with row vectors (world = index * M, translation
@@ -177,7 +212,7 @@ VoxelGrid load_concentration_grid(const std::filesystem::path& path, std::string
       problem += fmt::format(" (did you mean \"{}\"?)", near);
     throw InputError(file_name, "grid", name, problem);
   }
-  const openvdb::GridBase::Ptr base = file->readGrid(name);
+  const openvdb::GridBase::Ptr base = read_grid(*file, file_name, name);
   openvdb::FloatGrid::ConstPtr grid = openvdb::gridConstPtrCast<openvdb::FloatGrid>(base);
   std::string converted_from;
   if (!grid) {
@@ -286,12 +321,7 @@ GridReport inspect_vdb(const std::filesystem::path& path) {
   GridReport report;
   report.file = path.string();
   for (auto it = file->beginName(); it != file->endName(); ++it) {
-    openvdb::GridBase::Ptr grid;
-    try {
-      grid = file->readGrid(*it);
-    } catch (const openvdb::Exception& e) {
-      throw InputError(path.string(), *it, "", fmt::format("cannot read the grid ({})", e.what()));
-    }
+    const openvdb::GridBase::Ptr grid = read_grid(*file, report.file, *it);
     GridInfo info;
     info.name = *it;
     info.type = grid->valueType();

@@ -272,3 +272,67 @@ TEST(MeshLoad, AllDegenerateIsRejected) {
   const std::string msg = expect_input_error(file.path());
   EXPECT_NE(msg.find("degenerate"), std::string::npos) << msg;
 }
+
+// Assimp 5.2 reads past its buffer when a PLY header never ends (fuzz/crashes/mesh/crash-*:
+// a segfault) and allocates whatever element counts the header declares, so load_mesh
+// checks the header itself: every line one the format defines, an end_header, and
+// declared elements that fit in the file.
+TEST(MeshLoad, MalformedPlyHeaderIsRefusedNamingTheLine) {
+  const std::string tail = binary_ply_tetrahedron(1.f).substr(binary_ply_tetrahedron(1.f).find("end_header\n") + 11);
+  struct Case {
+    std::string header, expected;
+  };
+  const Case cases[] = {
+      // The shape of the fuzzer's crashes: end_header misspelt, so the header never ends.
+      {"ply\nformat binary_little_endian 1.0\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\n"
+       "element face 4\nproperty list uchar int vertex_indices\nend_hgader\n",
+       "line 9"},
+      {"ply\nformat binary_big_endian 2.0\nelement vertex 4\n", "line 2"},
+      {"ply\nformat ascii 1.0\nelemty float y\nend_header\n", "line 3"},
+      {"ply\nformat ascii 1.0\nproperty float x\nend_header\n", "line 3"},
+      {"ply\nformat ascii 1.0\nelement vertex many\nend_header\n", "line 3"},
+      {"ply\nformat ascii 1.0\nelement vertex 4\nproperty float\nend_header\n", "line 4"},
+      {"ply\nformat ascii 1.0\nelement face 4\nproperty list uchar vertex_indices\nend_header\n", "line 4"},
+      {"ply\nformat ascii 1.0\nelement vertex 4\nproperty quaternion x\nend_header\n", "line 4"},
+      {"plyx\nformat ascii 1.0\n", "line 1"},
+  };
+  for (const Case& c : cases) {
+    const TempFile file("bad_header.ply", c.header + tail);
+    const std::string msg = expect_input_error(file.path());
+    EXPECT_NE(msg.find(file.path().string()), std::string::npos) << msg;
+    EXPECT_NE(msg.find(c.expected), std::string::npos) << c.header << " -> " << msg;
+  }
+  const TempFile file("no_end.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n");
+  EXPECT_NE(expect_input_error(file.path()).find("no end_header"), std::string::npos);
+}
+
+TEST(MeshLoad, PlyElementCountsBeyondTheFileAreRefused) {
+  // 4294967295 vertices declared, 12 bytes of data: Assimp allocated 48 GB for it.
+  const TempFile huge("huge.ply",
+                      std::string("ply\nformat binary_little_endian 1.0\nelement vertex 4294967295\nproperty float x\n"
+                                  "property float y\nproperty float z\nelement face 1\n"
+                                  "property list uchar int vertex_indices\nend_header\n") +
+                          std::string(12, '\0'));
+  const std::string msg = expect_input_error(huge.path());
+  EXPECT_NE(msg.find(huge.path().string()), std::string::npos) << msg;
+  EXPECT_NE(msg.find("PLY element vertex = 4294967295"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("12 bytes"), std::string::npos) << msg;
+  // Each binary face takes at least its list's count byte: 60 of them cannot fit in the 52
+  // bytes after the vertices. ASCII counts at least two bytes per value.
+  std::string binary = binary_ply_tetrahedron(1.f);
+  binary.replace(binary.find("element face 4"), 14, "element face 60");
+  const TempFile cut("cut.ply", binary);
+  EXPECT_NE(expect_input_error(cut.path()).find("PLY element face = 60"), std::string::npos);
+  const TempFile ascii("short.ply",
+                       "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                       "element face 100\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n");
+  EXPECT_NE(expect_input_error(ascii.path()).find("PLY element face = 100"), std::string::npos);
+  // Well-formed files pass the check: ASCII with comments and CRLF, binary, the last value without a newline.
+  const TempFile crlf("crlf.ply",
+                      "ply\r\nformat ascii 1.0\r\ncomment made by hand\r\nobj_info none\r\nelement vertex 3\r\n"
+                      "property float x\r\nproperty float y\r\nproperty float z\r\nelement face 1\r\n"
+                      "property list uchar int vertex_indices\r\nend_header\r\n0 0 0\r\n1 0 0\r\n0 1 0\r\n3 0 1 2");
+  EXPECT_EQ(load_mesh(crlf.path()).triangle_count(), 1);
+  const TempFile good("good.ply", binary_ply_tetrahedron(1.f));
+  EXPECT_EQ(load_mesh(good.path()).triangle_count(), 4);
+}

@@ -5,6 +5,7 @@
 
 #include <filesystem>
 #include <fstream>
+#include <cstring>
 #include <functional>
 
 #include <openvdb/io/File.h>
@@ -188,4 +189,84 @@ TEST(VdbFile, InspectDescribesEveryGrid) {
   bool has_unit_scale = false;
   for (const auto& [k, v] : g.metadata) has_unit_scale |= k == "scale";
   EXPECT_TRUE(has_unit_scale);
+}
+
+
+namespace {
+
+// Where a one-grid .vdb keeps its grid descriptor's three offsets (grid header, data
+// blocks, end), following check_vdb_complete's walk: header, file metadata, grid
+// count, the grid's name, type and instance-parent strings.
+size_t descriptor_offsets_at(const std::string& bytes) {
+  const auto u32 = [&](size_t at) {
+    uint32_t v;
+    std::memcpy(&v, bytes.data() + at, 4);
+    return v;
+  };
+  size_t at = 8 + 4 + 8 + 1 + 36;  // magic, file version, library version, has-offsets flag, UUID
+  const uint32_t entries = u32(at);
+  at += 4;
+  for (uint32_t i = 0; i < 3 * entries; ++i) at += 4 + u32(at);
+  at += 4;                                             // grid count
+  for (int i = 0; i < 3; ++i) at += 4 + u32(at);       // name, type, instance parent
+  return at;
+}
+
+std::string read_bytes(const std::filesystem::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+}  // namespace
+
+// Corruptions inside a grid that the file-structure check alone let through: a file
+// cut inside the grid's data blocks whose descriptor was rewritten to match, a grid
+// metadata count turned into billions (OpenVDB looped on reading them), offsets out of
+// order, a transform whose map name is garbled. Each is refused naming the file (and,
+// where OpenVDB reads the grid, the grid) instead of an OpenVDB exception reaching the
+// user as an internal error, a runaway loop or a silently wrong grid.
+TEST(VdbFile, CorruptGridThatPassesTheStructureCheckIsRefused) {
+  DenseGrid d({20, 12, 9});
+  d.metadata.name = "chl";
+  d.metadata.unit = "uM";
+  Rng rng(test_seed(13), 0);
+  for (float& v : d.values) v = rng.uniform() < 0.3f ? 0.f : rng.uniform();
+  const auto whole = temp_path("corrupt_whole.vdb");
+  write_concentration_grid(whole, d);
+  const std::string bytes = read_bytes(whole);
+  const size_t offsets_at = descriptor_offsets_at(bytes);
+  int64_t pos[3];
+  std::memcpy(pos, bytes.data() + offsets_at, sizeof(pos));
+  ASSERT_EQ(uint64_t(pos[2]), bytes.size()) << "the test's walk of the file layout is off";
+  ASSERT_LT(pos[0], pos[1]);
+  EXPECT_NO_THROW(load_concentration_grid(whole, "chl"));
+
+  const auto refused = [&](const std::string& corrupt, const std::string& expected) {
+    const auto path = temp_path("corrupt.vdb");
+    std::ofstream(path, std::ios::binary | std::ios::trunc) << corrupt;
+    const std::string msg = error_of([&] { load_concentration_grid(path, "chl"); });
+    EXPECT_NE(msg.find("corrupt.vdb"), std::string::npos) << msg;
+    EXPECT_NE(msg.find(expected), std::string::npos) << msg;
+    EXPECT_NE(msg.find("corrupt"), std::string::npos) << msg;
+  };
+  const auto cut_with_matching_descriptor = [&](int64_t keep) {
+    std::string cut = bytes.substr(0, size_t(keep));
+    std::memcpy(cut.data() + offsets_at + 16, &keep, 8);  // the grid now "ends" where the file does
+    return cut;
+  };
+  // Cut inside the data blocks, header intact: OpenVDB's own decompression error, now named.
+  for (const int64_t keep : {pos[1] + 7, (pos[1] + pos[2]) / 2})
+    refused(cut_with_matching_descriptor(keep), "grid = chl: cannot be read");
+  // Cut inside the grid's header: the descriptor's end comes before its data blocks.
+  refused(cut_with_matching_descriptor((pos[0] + pos[1]) / 2), "offsets are out of order");
+  // The grid's metadata count (after its 4-byte compression flags) made huge.
+  std::string count = bytes;
+  count[size_t(pos[0]) + 4 + 3] = char(0x7f);
+  refused(count, "runs past the grid's header");
+  // The transform's map type name garbled: OpenVDB's KeyError, named.
+  std::string map = bytes;
+  const size_t name_at = map.find("UniformScaleMap");
+  ASSERT_NE(name_at, std::string::npos);
+  map[name_at + 3] = 'X';
+  refused(map, "grid = chl: cannot be read");
 }
