@@ -172,7 +172,7 @@ std::filesystem::path write_slab_scene(const SlabCase& s, const std::filesystem:
   const std::string json = fmt::format(
       R"({{
   "render": {{"resolution": [{res}, {res}], "spp": {spp}, "wavelengths": {wl}, "fluorescence": "{fl}",
-             "transmittance": "{tr}", "max_depth": 64}},
+             "transmittance": "{tr}", "excitation_through_glass": "{glass}", "max_depth": 64}},
   "camera": {{"type": "orthographic", "position": [0, 0, {camz}], "look_at": [0, 0, {D2}], "height": 0.01}},
   "pigments": {{"dye": {{
     "extinction": {{"table": {{"lambda": [{l0}, {l1}, {l2}, {l3}], "value": [0, {eps}, {eps}, 0]}}}},
@@ -186,7 +186,7 @@ std::filesystem::path write_slab_scene(const SlabCase& s, const std::filesystem:
 }}
 )",
       fmt::arg("res", s.resolution), fmt::arg("spp", s.spp), fmt::arg("wl", s.wavelengths),
-      fmt::arg("fl", s.fluorescence), fmt::arg("tr", s.transmittance), fmt::arg("camz", cam_z),
+      fmt::arg("fl", s.fluorescence), fmt::arg("tr", s.transmittance), fmt::arg("glass", s.excitation_through_glass), fmt::arg("camz", cam_z),
       fmt::arg("D2", s.D / 2), fmt::arg("l0", s.eps_lo - 1e-3), fmt::arg("l1", s.eps_lo), fmt::arg("l2", s.eps_hi),
       fmt::arg("l3", s.eps_hi + 1e-3), fmt::arg("eps", s.epsilon), fmt::arg("Q", s.Q),
       fmt::arg("emission", s.emission), fmt::arg("zeta", spectrum_or_number(s.zeta)), fmt::arg("pim", pigment_in_medium),

@@ -67,6 +67,7 @@ struct SlabCase {
   double glass_ior = 0;              // > 0: a glass plate in front of the lit face (transmission side only)
   double glass_thickness = 0.002;    // m
   double incidence_deg = 0;          // the beam's angle to the slab's normal
+  std::string excitation_through_glass = "connect";  // render.excitation_through_glass
 };
 
 // "slab" (docs/physics.md §7, homogeneous, lit side), "slab_transmission" (same, far

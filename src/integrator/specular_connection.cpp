@@ -250,13 +250,16 @@ std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3&
     const Ray ray = j == 0 ? Ray{x, d} : scene.geometry.spawn_ray(prev, d);
     if (!leg_reaches_face(scene, ray, length(v - ray.o), f)) return 0.f;
     const SurfaceHit here = solved_vertex_hit(f, path->ns[j]);
-    // Traced from the face back to the previous vertex: spawn_ray_to stops short
-    // of its target, and a medium point has no surface to stop short of.
-    const SampledSpectrum T = j == 0 ? leg_transmittance(ShadowOrigin{v, leg_medium, &here}, LightTarget{-d, x})
-                                     : leg_transmittance(ShadowOrigin{prev.p, leg_medium, &prev}, LightTarget{d, v});
+    const ShapeBinding& b = scene.shapes[f.shape_id];
+    // The first leg is traced from the face back to x: spawn_ray_to stops short
+    // of its target, and a medium point has no surface to stop short of. It
+    // starts in the medium on x's side of the face, which differs from x's own
+    // when an interface (a medium boundary) lies between them.
+    const SampledSpectrum T =
+        j == 0 ? leg_transmittance(ShadowOrigin{v, medium_after_crossing(b, f.ng, -d), &here}, LightTarget{-d, x})
+               : leg_transmittance(ShadowOrigin{prev.p, leg_medium, &prev}, LightTarget{d, v});
     weight *= T[0];
     if (weight == 0.f) return 0.f;
-    const ShapeBinding& b = scene.shapes[f.shape_id];
     // At the shading normal, as the path tracer's dielectric refracts.
     weight *= 1.f - fresnel_dielectric(dot(-d, path->ns[j]), ior_at(dielectric_of(scene, f.shape_id), wl[0]));
     if (weight == 0.f) return 0.f;

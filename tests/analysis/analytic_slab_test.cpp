@@ -43,10 +43,11 @@ Measured measure(const Scene& scene, const Ray& ray, int paths, uint64_t seed) {
 
 // Mean over lanes of measured / exact, and its standard error.
 std::pair<double, double> ratio_to_exact(const SlabCase& slab, const std::string& fluorescence, int paths,
-                                         uint64_t seed) {
+                                         uint64_t seed, const std::string& glass = "connect") {
   SlabCase s = slab;
   s.fluorescence = fluorescence;
-  s.name += "_" + fluorescence;
+  s.excitation_through_glass = glass;
+  s.name += "_" + fluorescence + "_" + glass;
   const Scene scene = load_scene(write_slab_scene(s, scratch_dir("glass_wall_slab")));
   const Ray ray = s.reflection_side ? Ray{{0, 0, 1}, {0, 0, -1}} : Ray{{0, 0, -1}, {0, 0, 1}};
   const Measured m = measure(scene, ray, paths, seed);
@@ -84,7 +85,7 @@ TEST(GlassWallSlab, DirectStraightThroughGlassMatchesAtNormalIncidence) {
   // A distant light: only the straight-through Fresnel crossing reaches it. At
   // normal incidence it neglects only the plate's internal reflections
   // (R² = 0.16 %, below 4σ here).
-  const auto [r, sigma] = ratio_to_exact(analytic_case("slab_glass_wall"), "direct", 40000, 41);
+  const auto [r, sigma] = ratio_to_exact(analytic_case("slab_glass_wall"), "direct", 40000, 41, "fresnel");
   std::printf("slab behind glass, normal incidence, direct/exact = %.4f (sigma %.4f)\n", r, sigma);
   EXPECT_NEAR(r, 1.0, 4 * sigma + 0.0016);
 }
@@ -95,7 +96,7 @@ TEST(GlassWallSlab, DirectStraightThroughGlassAtSixtyDegrees) {
   // With equal indices on both sides the beam leaves the plate parallel to
   // itself, so the straight crossing is exact but for the plate's internal
   // reflections, here R² = 0.8 %: that much low, and no more.
-  const auto [r, sigma] = ratio_to_exact(analytic_case("slab_glass_wall_oblique"), "direct", 40000, 42);
+  const auto [r, sigma] = ratio_to_exact(analytic_case("slab_glass_wall_oblique"), "direct", 40000, 42, "fresnel");
   const SlabCase s = analytic_case("slab_glass_wall_oblique");
   const double theta = s.incidence_deg * M_PI / 180;
   // Unpolarised R of one face from T of the plate, T = (1-R)/(1+R); straight through
@@ -105,6 +106,21 @@ TEST(GlassWallSlab, DirectStraightThroughGlassAtSixtyDegrees) {
   std::printf("slab behind glass at 60 deg, direct/exact = %.4f (sigma %.4f), expected %.4f\n", r, sigma,
               no_interreflection / with);
   EXPECT_NEAR(r, no_interreflection / with, 4 * sigma);
+}
+
+TEST(GlassWallSlab, DirectConnectionThroughGlassMatchesTheClosedForm) {
+  // The default strategy ("connect") solves for the refracted path to the
+  // distant light through the plate's two parallel faces: exact but for the
+  // plate's internal reflections, (1-R)² against T = (1-R)²/(1-R²), at normal
+  // incidence and at 60°.
+  for (const char* name : {"slab_glass_wall", "slab_glass_wall_oblique"}) {
+    const SlabCase s = analytic_case(name);
+    const auto [r, sigma] = ratio_to_exact(s, "direct", 40000, 44, "connect");
+    const double T = plate_transmission(1.5, s.incidence_deg * M_PI / 180), R = (1 - T) / (1 + T);
+    const double expected = (1 - R) * (1 - R) / T;
+    std::printf("%s, connect: direct/exact = %.4f (sigma %.4f), expected %.4f\n", name, r, sigma, expected);
+    EXPECT_NEAR(r, expected, 4 * sigma) << name;
+  }
 }
 
 TEST(GridSlab, LinearConcentrationIsExactWithEventsDrawnPerMajorantCell) {
