@@ -53,6 +53,8 @@ struct RenderArgs {
   bool quiet = false;
   std::optional<double> target_error, time_limit;  // film/stopping_rule.h
   std::optional<std::string> target_region;        // "x0,y0,x1,y1"
+  bool adaptive = false;                           // film/adaptive.h
+  int pilot_spp = 16;
 };
 
 int render(const RenderArgs& a);
@@ -91,6 +93,15 @@ Command add_render_command(CLI::App& app) {
                                  "looking at 16, 32, 64, ... spp (docs/convergence.md); --spp is then the maximum (default 65536)")
                      ->check(Real(1e-9, 1e9));
   sub->add_option("--target-region", r.target_region, "Pixels x0,y0,x1,y1 whose error --target-error measures")->needs(target);
+  auto* adaptive = sub->add_flag("--adaptive", r.adaptive,
+                                 "With --target-error: samples per pixel from an independent pilot render, so that the "
+                                 "image meets the target with fewer samples and stays unbiased (docs/convergence.md); "
+                                 "writes an spp layer")
+                       ->needs(target)
+                       ->excludes(ckpt);
+  sub->add_option("--pilot-spp", r.pilot_spp, "Samples per pixel of the --adaptive pilot (not in the image; default 16)")
+      ->check(Integer(2, 4096))
+      ->needs(adaptive);
   sub->add_option("--time-limit", r.time_limit, "Stop after the first pass that ends past this many seconds; writes what it has")
       ->check(Real(0, 1e9));
   return {sub, [args] { return render(*args); }};
@@ -132,11 +143,18 @@ int render(const RenderArgs& a) {
   const bool root = job.ranks.rank == 0;
   const PixelWindow crop = job.crop.value_or(PixelWindow{0, 0, s.width, s.height});
   const StoppingRule stopping = make_stopping_rule(a.target_error, a.target_region, a.time_limit, crop, job.ranks.size);
+  if (a.adaptive)
+    job.adaptive = AdaptiveSampling{.target_relative_error = *a.target_error, .region = stopping.region, .pilot_spp = a.pilot_spp,
+                                    .min_spp = stopping.min_spp};
+  // Adaptive: the counts meet the target, so passes stop only on the time limit (a
+  // look at the image's own error would make the counts depend on its samples).
+  StoppingRule pass_rule = stopping;
+  if (a.adaptive) pass_rule.target_relative_error.reset();
   StopDecision stopped;
   const auto run_start = std::chrono::steady_clock::now();
   job.stop_after_pass = [&](const Film& f, int done) {
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - run_start).count();
-    stopped = check_stop(stopping, f, done, seconds);
+    stopped = check_stop(pass_rule, f, done, seconds);
     return stopped.reason != StopReason::none;
   };
 

@@ -110,6 +110,7 @@ Film::Film(Film&& o) noexcept
       spectral_(std::move(o.spectral_)),
       aovs_(o.aovs_),
       aov_(std::move(o.aov_)),
+      spp_(std::move(o.spp_)),
       d65_(std::move(o.d65_)),
       nonfinite_(o.nonfinite_samples()) {}
 
@@ -126,6 +127,7 @@ Film& Film::operator=(Film&& o) noexcept {
   spectral_ = std::move(o.spectral_);
   aovs_ = o.aovs_;
   aov_ = std::move(o.aov_);
+  spp_ = std::move(o.spp_);
   d65_ = std::move(o.d65_);
   nonfinite_.store(o.nonfinite_samples(), std::memory_order_relaxed);
   return *this;
@@ -156,10 +158,13 @@ void Film::enable_aovs(AovMask mask) {
   d65_ = d65.scaled(1.f / luminance(d65));
 }
 
+void Film::enable_sample_counts() { spp_.assign(size_t(width_) * size_t(height_), 0.0); }
+
 Film Film::empty_like() const {
   Film f(width_, height_, layer_names_, color_space_);
   if (spectral_bins_ > 0) f.enable_spectral(spectral_min_nm_, spectral_max_nm_, spectral_bins_);
   f.enable_aovs(aovs_);
+  if (has_sample_counts()) f.enable_sample_counts();
   return f;
 }
 
@@ -221,20 +226,26 @@ void Film::add_layer_sample(size_t pixel, int layer, const SampledSpectrum& L, c
 
 RGB Film::pixel_mean(int layer, size_t pixel, double n) const {
   const double* s = &xyz_[size_t(layer)][pixel * 3];
-  const double inv_n = 1.0 / n;
+  n = pixel_samples(pixel, n);
+  const double inv_n = n > 0 ? 1.0 / n : 0.0;  // a counted pixel with no samples is black
   return rgb_conversion(color_space_)({s[0] * inv_n, s[1] * inv_n, s[2] * inv_n});
 }
 
 RGB Film::pixel_standard_error(int layer, size_t pixel, double n) const {
   const RGB mean = pixel_mean(layer, pixel, n);  // in double: standard_error's difference cancels
   const double* s2 = &rgb2_[size_t(layer)][pixel * 3];
+  n = pixel_samples(pixel, n);
   return {standard_error(mean.r, s2[0], n), standard_error(mean.g, s2[1], n), standard_error(mean.b, s2[2], n)};
 }
 
 Image Film::to_image(double samples_per_pixel) const {
   if (!(samples_per_pixel > 0)) throw std::invalid_argument(fmt::format("Film::to_image: samples_per_pixel = {}", samples_per_pixel));
   const size_t pixel_count = size_t(width_) * size_t(height_);
-  const double inv_spp = 1.0 / samples_per_pixel;
+  // 1 / the samples of pixel p (0 for a counted pixel without any).
+  const auto inv_spp = [&](size_t p) {
+    const double n = pixel_samples(p, samples_per_pixel);
+    return n > 0 ? 1.0 / n : 0.0;
+  };
 
   Image image;
   image.width = width_;
@@ -250,8 +261,7 @@ Image Film::to_image(double samples_per_pixel) const {
     ImageLayer layer{"S0", {}, std::vector<float>(spectral_.size())};
     for (int b = 0; b < spectral_bins_; ++b)
       layer.channels.push_back(spectral_channel_name(float(spectral_min_nm_ + (b + 0.5) * width_nm)));
-    const double norm = inv_spp / width_nm;
-    for (size_t i = 0; i < spectral_.size(); ++i) layer.pixels[i] = float(spectral_[i] * norm);
+    for (size_t i = 0; i < spectral_.size(); ++i) layer.pixels[i] = float(spectral_[i] * inv_spp(i / size_t(spectral_bins_)) / width_nm);
     image.layers.push_back(std::move(layer));
     image.metadata.set("spectral_bin_width_nm", width_nm);
   }
@@ -266,19 +276,28 @@ Image Film::to_image(double samples_per_pixel) const {
     layer.pixels.resize(pixel_count * layer.channels.size());
     for (size_t p = 0; p < pixel_count; ++p)
       for (size_t c = 0; c < layer.channels.size(); ++c)
-        layer.pixels[p * layer.channels.size() + c] = float(value(&aov_[p * kAovSums], c));
+        layer.pixels[p * layer.channels.size() + c] = float(value(&aov_[p * kAovSums], c, inv_spp(p)));
     image.layers.push_back(std::move(layer));
   };
-  aov_layer(kAovAlpha, {"A"}, [&](const double* a, size_t) { return a[0] * inv_spp; });
-  aov_layer(kAovDepth, {"Z", "coverage"}, [&](const double* a, size_t c) {
-    return c == 0 ? (a[2] > 0 ? a[1] / a[2] : std::numeric_limits<double>::infinity()) : a[2] * inv_spp;
+  aov_layer(kAovAlpha, {"A"}, [&](const double* a, size_t, double inv_n) { return a[0] * inv_n; });
+  aov_layer(kAovDepth, {"Z", "coverage"}, [&](const double* a, size_t c, double inv_n) {
+    return c == 0 ? (a[2] > 0 ? a[1] / a[2] : std::numeric_limits<double>::infinity()) : a[2] * inv_n;
   });
-  aov_layer(kAovNormal, {"X", "Y", "Z"}, [&](const double* a, size_t c) { return a[3 + c] * inv_spp; });
-  aov_layer(kAovAlbedo, {"R", "G", "B"}, [&](const double* a, size_t c) { return a[6 + c] * inv_spp; });
+  aov_layer(kAovNormal, {"X", "Y", "Z"}, [&](const double* a, size_t c, double inv_n) { return a[3 + c] * inv_n; });
+  aov_layer(kAovAlbedo, {"R", "G", "B"}, [&](const double* a, size_t c, double inv_n) { return a[6 + c] * inv_n; });
+  double mean_spp = samples_per_pixel;
+  if (has_sample_counts()) {
+    ImageLayer layer{"spp", {"N"}, std::vector<float>(pixel_count)};
+    double total = 0;
+    for (size_t p = 0; p < pixel_count; ++p) layer.pixels[p] = float(spp_[p]), total += spp_[p];
+    image.layers.push_back(std::move(layer));
+    mean_spp = total / double(pixel_count);
+    image.metadata.set("adaptive", 1);
+  }
   if (aovs_) image.metadata.set("aovs", fmt::format("{}", fmt::join(aov_list(aovs_), ",")));
   image.metadata.set("color_space", color_space_ == ColorSpace::sRGB ? std::string("linear sRGB (D65)")
                                                                       : std::string("ACEScg (AP1, Bradford-adapted from D65)"));
-  image.metadata.set("samples_per_pixel", samples_per_pixel);
+  image.metadata.set("samples_per_pixel", mean_spp);
   image.metadata.set("nonfinite_samples", double(nonfinite_samples()));  // double: counts can pass 2^31
   return image;
 }
@@ -286,7 +305,7 @@ Image Film::to_image(double samples_per_pixel) const {
 void Film::merge(const Film& other) {
   if (other.width_ != width_ || other.height_ != height_ || other.layer_names_ != layer_names_ ||
       other.spectral_bins_ != spectral_bins_ || other.spectral_min_nm_ != spectral_min_nm_ || other.spectral_max_nm_ != spectral_max_nm_ ||
-      other.aovs_ != aovs_)
+      other.aovs_ != aovs_ || other.spp_.size() != spp_.size())
     throw std::invalid_argument(fmt::format("Film::merge: films differ ({}x{}, {} layers, {} bins vs {}x{}, {} layers, {} bins)", width_,
                                             height_, layer_names_.size(), spectral_bins_, other.width_, other.height_,
                                             other.layer_names_.size(), other.spectral_bins_));
@@ -297,6 +316,7 @@ void Film::merge(const Film& other) {
     }
   for (size_t i = 0; i < spectral_.size(); ++i) spectral_[i] += other.spectral_[i];
   for (size_t i = 0; i < aov_.size(); ++i) aov_[i] += other.aov_[i];
+  for (size_t i = 0; i < spp_.size(); ++i) spp_[i] += other.spp_[i];
   nonfinite_.fetch_add(other.nonfinite_samples(), std::memory_order_relaxed);
 }
 

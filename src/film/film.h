@@ -28,6 +28,12 @@
 // fraction that did; "N" (X, Y, Z) = the world-space shading normal facing the camera
 // (0 for samples that hit nothing, so edges shorten it); "albedo" (R, G, B) = the
 // denoiser albedo, reflectance under D65 in the output colour space (white = 1).
+//
+// Per-pixel sample counts (adaptive sampling, film/adaptive.h): when enabled the
+// film counts each pixel's camera samples itself, and every mean, standard error
+// and AOV is over that pixel's own count instead of the uniform n callers pass;
+// to_image then writes them as an "spp" layer (channel "N") with metadata
+// adaptive = 1 and samples_per_pixel = their mean.
 #include <atomic>
 #include <cstdint>
 #include <span>
@@ -97,6 +103,14 @@ class Film {
   // Sums for the compositing layers in `mask` (all kAovSums per pixel when any is set).
   void enable_aovs(AovMask mask);
   AovMask aovs() const { return aovs_; }
+  // Count samples per pixel (add_sample_count); empty_like and merge carry the counts.
+  void enable_sample_counts();
+  bool has_sample_counts() const { return !spp_.empty(); }
+  // `count` more camera samples went to pixel (x, y); thread-safe for distinct pixels.
+  void add_sample_count(int x, int y, int count) { spp_[size_t(y) * size_t(width_) + size_t(x)] += count; }
+  // The samples of film pixel `pixel`: its own count when counted, else n.
+  double pixel_samples(size_t pixel, double n) const { return spp_.empty() ? n : spp_[pixel]; }
+  const std::vector<double>& raw_sample_counts() const { return spp_; }
   // A film of the same size, layers, colour space, bins and AOVs, all sums zero.
   Film empty_like() const;
 
@@ -111,7 +125,7 @@ class Film {
                   const AovSample* aov = nullptr);
   uint64_t nonfinite_samples() const { return nonfinite_.load(std::memory_order_relaxed); }
 
-  // Mean over `samples_per_pixel` samples: one RGB layer per layer name (channels
+  // Mean over `samples_per_pixel` samples (each pixel's own count when counted): one RGB layer per layer name (channels
   // R, G, B), then the spectral layer "S0" (channels "<centre>nm", decimal comma)
   // if enabled, then one "<layer>_stderr" RGB layer per layer (standard error of
   // the mean, same units). Metadata: color_space, samples_per_pixel, nonfinite_samples.
@@ -149,6 +163,7 @@ class Film {
   std::vector<double> spectral_;
   AovMask aovs_ = 0;
   std::vector<double> aov_;
+  std::vector<double> spp_;  // per-pixel sample counts (empty: uniform)
   Spectrum d65_;  // the albedo's illuminant, normalised to Y = 1 (set by enable_aovs)
   std::atomic<uint64_t> nonfinite_{0};
 };

@@ -33,13 +33,19 @@ std::vector<Tile> make_tiles(int x0, int y0, int x1, int y1) {
 }
 
 // `film` holds image pixels from (fx0, fy0) on.
+// With `pixel_spp`, pixel p renders samples up to first_sample + pixel_spp[p] and counts them.
 void render_tile(const Scene& scene, Film& film, int fx0, int fy0, const Tile& tile, int s0, int s1, uint64_t seed,
-                 PathStats& stats) {
+                 int first_sample, const std::vector<int>* pixel_spp, PathStats& stats) {
   const int n_lambda = scene.settings.wavelengths;
   const AovMask aovs = film.aovs();
   for (int y = tile.y0; y < tile.y1; ++y)
-    for (int x = tile.x0; x < tile.x1; ++x)
-      for (int s = s0; s < s1; ++s) {
+    for (int x = tile.x0; x < tile.x1; ++x) {
+      int end = s1;
+      if (pixel_spp) {
+        end = std::min(s1, first_sample + (*pixel_spp)[size_t(y - fy0) * size_t(film.width()) + size_t(x - fx0)]);
+        if (end > s0) film.add_sample_count(x - fx0, y - fy0, end - s0);
+      }
+      for (int s = s0; s < end; ++s) {
         Rng rng = sample_rng(seed, x, y, s);
         SampledWavelengths lambda = SampledWavelengths::sample_visible(rng.uniform(), n_lambda);
         const Point2 film_pos{x + rng.uniform(), y + rng.uniform()};  // box filter
@@ -56,6 +62,7 @@ void render_tile(const Scene& scene, Film& film, int fx0, int fy0, const Tile& t
         const AovSample aov = trace_aovs(scene, ray, scene.camera_medium, lambda, aov_rng, aovs);
         film.add_sample(x - fx0, y - fy0, layers, lambda, &aov);
       }
+    }
 }
 
 }  // namespace
@@ -83,6 +90,9 @@ RenderStats render(const Scene& scene, Film& film, const RenderOptions& options)
   if (options.samples_done < 0 || options.samples_done > options.spp || options.first_sample < 0)
     throw std::invalid_argument(fmt::format("render: samples_done {} outside [0, spp = {}] or first_sample {} < 0",
                                             options.samples_done, options.spp, options.first_sample));
+  if (options.pixel_spp &&
+      (!film.has_sample_counts() || options.pixel_spp->size() != size_t(film.width()) * size_t(film.height())))
+    throw std::invalid_argument("render: pixel_spp needs a film that counts samples and one count per film pixel");
   const std::vector<Tile> tiles = make_tiles(fx0, fy0, fx0 + film.width(), fy0 + film.height());
   tbb::enumerable_thread_specific<PathStats> stats;
   tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
@@ -105,7 +115,8 @@ RenderStats render(const Scene& scene, Film& film, const RenderOptions& options)
             pass_complete = false;
             return;
           }
-          render_tile(scene, pass, fx0, fy0, tiles[t], s0, s0 + count, options.seed, stats.local());
+          render_tile(scene, pass, fx0, fy0, tiles[t], s0, s0 + count, options.seed, options.first_sample, options.pixel_spp,
+                      stats.local());
           if (progress) progress->add(count);
         }
       });

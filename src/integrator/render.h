@@ -38,11 +38,15 @@ struct RenderOptions {
   // Called after on_pass: true ends the render there (not an interruption), e.g.
   // film/stopping_rule.h's check_stop for --target-error and --time-limit.
   std::function<bool(const Film& film, int samples_done)> stop_after_pass;
+  // Adaptive sampling (film/adaptive.h): film pixel p renders only samples
+  // [first_sample, first_sample + (*pixel_spp)[p]); passes skip pixels past their
+  // count. The film must count samples (Film::enable_sample_counts).
+  const std::vector<int>* pixel_spp = nullptr;
 };
 
 struct RenderStats {
   double seconds = 0;
-  int samples_done = 0;  // complete passes: every pixel has this many samples (including options.samples_done)
+  int samples_done = 0;  // complete passes: every pixel has this many samples (including options.samples_done; at most its pixel_spp)
   bool interrupted = false;
   bool stopped_after_pass = false;  // stop_after_pass ended the render before spp
   PathStats paths;

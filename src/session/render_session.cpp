@@ -1,5 +1,6 @@
 #include "session/render_session.h"
 
+#include <algorithm>
 #include <chrono>
 
 #include <fmt/format.h>
@@ -143,6 +144,10 @@ RenderOutcome run_render_session(const Scene& scene, const RenderJob& job) {
   if (job_bins(scene, job) > 0) o.film.enable_spectral(kLambdaMin, kLambdaMax, job_bins(scene, job));
   o.film.enable_aovs(s.aovs);
 
+  if (job.adaptive && (g.size > 1 || !job.checkpoint.empty()))
+    throw InputError("command line", "--adaptive", "",
+                     g.size > 1 ? "not available under MPI (the ranks would need the pilot's per-pixel counts); render without it"
+                                : "not available with --checkpoint/--resume (a checkpoint does not carry the per-pixel counts)");
   o.checkpoint = job.checkpoint;
   if (!o.checkpoint.empty() && g.size > 1) o.checkpoint += fmt::format(".rank{}of{}", g.rank, g.size);
   CheckpointHeader header{CHLOROVDB_VERSION, std::filesystem::absolute(scene.file).string(), s.width, s.height, crop,
@@ -217,8 +222,31 @@ RenderOutcome run_render_session(const Scene& scene, const RenderJob& job) {
       last_save = now;
     }
   };
+  std::vector<int> pixel_spp;
+  PathStats pilot_paths;
+  if (job.adaptive && mine.size() > 0) {
+    // The pilot: its own streams and film, so the counts are independent of the image's samples.
+    AdaptiveSampling a = *job.adaptive;
+    a.max_spp = mine.size();
+    a.min_spp = std::min(a.min_spp, a.max_spp);
+    Film pilot(o.film.width(), o.film.height(), film_layer_names(), o.film.color_space());
+    RenderOptions po;
+    po.spp = a.pilot_spp;
+    po.film_x0 = crop.x0;
+    po.film_y0 = crop.y0;
+    po.threads = job.threads;
+    po.seed = pilot_seed(ro.seed);
+    po.stop = stop;
+    pilot_paths = render(scene, pilot, po).paths;
+    pixel_spp = adaptive_sample_counts(pilot, a);
+    o.pilot_spp = a.pilot_spp;
+    o.film.enable_sample_counts();
+    ro.pixel_spp = &pixel_spp;
+    ro.spp = *std::max_element(pixel_spp.begin(), pixel_spp.end());
+  }
   RenderStats stats;
   if (mine.size() > 0) stats = render(scene, o.film, ro);
+  stats.paths.paths += pilot_paths.paths;
   // The final (or stopped) state, so a completed part also leaves its exact sums.
   if (!o.checkpoint.empty() && stats.samples_done > 0 && stats.samples_done != saved_done) save(stats.samples_done);
   else if (job.on_checkpoint && o.checkpoint.empty() && stats.samples_done > 0) job.on_checkpoint(o.film, stats.samples_done);
@@ -261,6 +289,7 @@ Image session_image(const Scene& scene, const RenderJob& job, const RenderOutcom
   m.set("wall_time_s", o.seconds);
   m.set("interrupted", o.interrupted ? 1 : 0);
   if (o.stopped_by_rule) m.set("stopped_by_rule", 1);
+  if (o.pilot_spp > 0) m.set("adaptive_pilot_spp", o.pilot_spp);
   m.set("nonfinite_samples", double(o.nonfinite_samples));  // including sessions before a resume
   if (o.resumed_at > 0) m.set("resumed_at_spp", o.resumed_at);
   if (o.ranks > 1) m.set("mpi_ranks", o.ranks);

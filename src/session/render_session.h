@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "checkpoint/partition.h"
+#include "film/adaptive.h"
 #include "film/film.h"
 #include "integrator/render.h"
 #include "io/image.h"
@@ -54,6 +55,11 @@ struct RenderJob {
   // rewrites its EXR there.
   std::function<void(const Film& film, int samples_done)> on_checkpoint;
   RankGroup ranks;
+  // Adaptive sampling (film/adaptive.h): a pilot from its own streams, then
+  // exactly its n_p samples per pixel from the range's first sample, capped by
+  // the range's size (which replaces adaptive->max_spp). InputError with several
+  // ranks or a checkpoint: they would have to carry the pilot's counts.
+  std::optional<AdaptiveSampling> adaptive;
 };
 
 struct RenderOutcome {
@@ -68,6 +74,7 @@ struct RenderOutcome {
   double seconds = 0;           // over all sessions of a resumed render (the slowest rank)
   double session_seconds = 0;   // this run's
   uint64_t nonfinite_samples = 0;
+  int pilot_spp = 0;  // adaptive: the pilot's samples per pixel (not in `film`)
   PathStats paths{};  // summed over the ranks
   std::filesystem::path checkpoint{};  // this rank's file (empty: none)
   bool root() const { return rank == 0; }
