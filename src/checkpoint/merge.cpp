@@ -142,6 +142,8 @@ Image merge_exrs(const std::vector<std::filesystem::path>& files, MergeSummary* 
   int64_t total = 0;
   for (const Part& p : parts) {
     Image img = read_exr(p.file);
+    if (img.metadata.find("adaptive"))  // its pixels have counts of their own: the part's range does not weight them
+      throw InputError(p.file.string(), "adaptive", "1", "an adaptive render (per-pixel sample counts) cannot be merged");
     const PixelWindow& c = p.info.crop;
     if (img.width != c.width() || img.height != c.height())
       throw InputError(p.file.string(), "crop", to_string(c), fmt::format("but the image is {}x{}", img.width, img.height));

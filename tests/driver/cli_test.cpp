@@ -299,6 +299,32 @@ TEST(RenderCli, TargetErrorAndTimeLimitStopEarly) {
   EXPECT_NE(r.output.find("--target-region"), std::string::npos) << r.output;
 }
 
+// --adaptive: a pilot, then per-pixel counts within [16, --spp], written as an spp
+// layer with adaptive = 1; refused with a checkpoint (the counts are not carried).
+TEST(RenderCli, AdaptiveWritesPerPixelCounts) {
+  const TestDir dir;
+  auto r = run(render_args(dir / "a.exr", {"--target-error", "0.05", "--adaptive", "--pilot-spp", "8", "--spp", "40"}), dir / "a.log");
+  ASSERT_EQ(r.status, 0) << r.output;
+  const Image img = read_exr(dir / "a.exr");
+  EXPECT_EQ(metadata_int(img, "adaptive"), 1);
+  EXPECT_EQ(metadata_int(img, "adaptive_pilot_spp"), 8);
+  const ImageLayer* spp = img.find_layer("spp");
+  ASSERT_NE(spp, nullptr);
+  float lo = 1e9f, hi = 0;
+  for (float n : spp->pixels) lo = std::min(lo, n), hi = std::max(hi, n);
+  EXPECT_GE(lo, 16.f);
+  EXPECT_LE(hi, 40.f);
+  EXPECT_EQ(metadata_int(img, "spp"), int(hi));
+  r = run({kExe, "merge", (dir / "a.exr").string(), "-o", (dir / "m.exr").string()}, dir / "m.log");  // counts per pixel
+  EXPECT_NE(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("adaptive"), std::string::npos) << r.output;
+  r = run(render_args(dir / "c.exr", {"--target-error", "0.05", "--adaptive", "--checkpoint", (dir / "c.ckpt").string()}), dir / "c.log");
+  EXPECT_NE(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("--adaptive"), std::string::npos) << r.output;
+  r = run(render_args(dir / "d.exr", {"--adaptive"}), dir / "d.log");
+  EXPECT_NE(r.status, 0) << r.output;
+}
+
 TEST(MeasureCli, PrintsIntervalsAndWritesCsv) {
   const TestDir dir;
   const auto r = run({kExe, "measure", scene_file(), "--region", "10,8,14,12", "--resolution", "32x24", "--spp", "8", "--batches", "4",
