@@ -13,10 +13,7 @@ std::vector<int> adaptive_sample_counts(const Film& pilot, const AdaptiveSamplin
     throw std::invalid_argument(fmt::format("adaptive_sample_counts: target {}, pilot {} spp, spp range [{}, {}]",
                                             a.target_relative_error, a.pilot_spp, a.min_spp, a.max_spp));
   const int w = pilot.width(), h = pilot.height();
-  const PixelRegion r = a.region.value_or(PixelRegion{0, 0, w, h});
-  if (r.x0 < 0 || r.y0 < 0 || r.x1 > w || r.y1 > h || r.x0 >= r.x1 || r.y0 >= r.y1)
-    throw std::invalid_argument(fmt::format("adaptive_sample_counts: region {},{},{},{} is empty or outside the {}x{} film", r.x0,
-                                            r.y0, r.x1, r.y1, w, h));
+  const PixelRegion r = region_in_film(pilot, a.region, "adaptive_sample_counts");
   const double P = a.pilot_spp;
   std::vector<double> sd(size_t(w) * size_t(h));  // sqrt(v_p)
   for (size_t p = 0; p < sd.size(); ++p) {

@@ -17,11 +17,16 @@ const char* to_string(StopReason r) {
   return "?";
 }
 
-double relative_standard_error(const Film& film, double n, const std::optional<PixelRegion>& region) {
+PixelRegion region_in_film(const Film& film, const std::optional<PixelRegion>& region, const char* caller) {
   const PixelRegion r = region.value_or(PixelRegion{0, 0, film.width(), film.height()});
   if (r.x0 < 0 || r.y0 < 0 || r.x1 > film.width() || r.y1 > film.height() || r.x0 >= r.x1 || r.y0 >= r.y1)
-    throw std::invalid_argument(fmt::format("relative_standard_error: region {},{},{},{} is empty or outside the {}x{} film", r.x0,
-                                            r.y0, r.x1, r.y1, film.width(), film.height()));
+    throw std::invalid_argument(fmt::format("{}: region {},{},{},{} is empty or outside the {}x{} film", caller, r.x0, r.y0,
+                                            r.x1, r.y1, film.width(), film.height()));
+  return r;
+}
+
+double relative_standard_error(const Film& film, double n, const std::optional<PixelRegion>& region) {
+  const PixelRegion r = region_in_film(film, region, "relative_standard_error");
   double sum_mean = 0, sum_var = 0;
   for (int y = r.y0; y < r.y1; ++y)
     for (int x = r.x0; x < r.x1; ++x) {

@@ -44,6 +44,10 @@ struct StopDecision {
   double relative_error = -1;  // e(n) at this look (-1: not looked at)
 };
 
+// `region`, or the whole film when empty. Throws std::invalid_argument, naming
+// `caller`, for an empty region or one outside the film.
+PixelRegion region_in_film(const Film& film, const std::optional<PixelRegion>& region, const char* caller);
+
 // e(n) of layer 0 over `region` (the whole film when empty) with n samples per
 // pixel. Infinite when the region's mean is not positive. Throws
 // std::invalid_argument for an empty region or one outside the film.
