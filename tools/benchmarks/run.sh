@@ -23,8 +23,9 @@
 #                    CPU time (summed over threads), not wall time, so other load on a shared
 #                    machine does not skew the comparison
 #   REF_SPP=2048     samples per pixel each reference starts with (and the pilot is scored on)
-#   REF_SPP_MAX=16384  cap of a reference's samples per pixel, so a run stays bounded (about
-#                    35 min on 2 cores at the defaults); a reference that reaches it without
+#   REF_SPP_MAX=8192  cap of a reference's samples per pixel: what bounds a run (at 96x72 the
+#                    default scene costs about 11 CPU-ms per spp, so a reference at the cap
+#                    about 90 CPU-s, 45 s on 2 threads); a reference that reaches it without
 #                    meeting the criterion is reported as not converged
 #   RESOLUTION=96x72  image size of references and variants
 #   THREADS=1        worker threads of the timed variants (one: no idle-thread spinning in the CPU time)
@@ -40,7 +41,7 @@ CHLOROVDB=${CHLOROVDB:-build/src/cli/chlorovdb}
 CHLOROVDB_BENCH=${CHLOROVDB_BENCH:-build/src/analysis/chlorovdb_bench}
 BUDGET=${BUDGET:-3}
 REF_SPP=${REF_SPP:-2048}
-REF_SPP_MAX=${REF_SPP_MAX:-16384}
+REF_SPP_MAX=${REF_SPP_MAX:-8192}
 RESOLUTION=${RESOLUTION:-96x72}
 THREADS=${THREADS:-1}
 REF_THREADS=${REF_THREADS:-2}
