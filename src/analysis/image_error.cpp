@@ -13,6 +13,15 @@ namespace chlorovdb {
 
 namespace {
 
+// The fraction of `total` held by the largest kTopPixelFraction of `per_pixel` (at least one).
+double top_share(std::vector<double>& per_pixel, double total) {
+  const size_t top = std::max<size_t>(1, size_t(std::ceil(kTopPixelFraction * double(per_pixel.size()))));
+  std::nth_element(per_pixel.begin(), per_pixel.begin() + (top - 1), per_pixel.end(), std::greater<double>());
+  double worst = 0;
+  for (size_t i = 0; i < top; ++i) worst += per_pixel[i];
+  return worst / total;
+}
+
 LayerError layer_error(const ImageLayer& x, const ImageLayer& r, const ImageLayer* r_stderr) {
   LayerError e;
   e.layer = r.name;
@@ -45,16 +54,14 @@ LayerError layer_error(const ImageLayer& x, const ImageLayer& r, const ImageLaye
     e.reference_rel_variance = rel_var / double(n);
   }
   if (const size_t nc = r.channels.size(); n && nc && se > 0) {
-    std::vector<double> per_pixel(n / nc, 0.0);
+    std::vector<double> per_pixel(n / nc, 0.0), per_pixel_rel(n / nc, 0.0);
     for (size_t i = 0; i < n; ++i) {
       const double d = double(x.pixels[i]) - double(r.pixels[i]);
       per_pixel[i / nc] += d * d;
+      per_pixel_rel[i / nc] += d * d / (double(r.pixels[i]) * r.pixels[i] + eps);
     }
-    const size_t top = std::max<size_t>(1, size_t(std::ceil(kTopPixelFraction * double(per_pixel.size()))));
-    std::nth_element(per_pixel.begin(), per_pixel.begin() + (top - 1), per_pixel.end(), std::greater<double>());
-    double worst = 0;
-    for (size_t i = 0; i < top; ++i) worst += per_pixel[i];
-    e.top_pixel_share = worst / se;
+    e.top_pixel_share = top_share(per_pixel, se);
+    e.top_pixel_share_rel = top_share(per_pixel_rel, rel);
   }
   if (n) {
     std::vector<float> magnitude(n);
@@ -91,16 +98,28 @@ std::vector<LayerError> image_errors(const Image& estimate, const Image& referen
   return errors;
 }
 
+double own_mse(const LayerError& e) { return e.mse - e.reference_variance; }
+double own_rel_mse(const LayerError& e) { return e.rel_mse - e.reference_rel_variance; }
+
+double reference_rel_share(const LayerError& e) { return e.rel_mse > 0 ? e.reference_rel_variance / e.rel_mse : 0.0; }
+
+bool relative_error_trustworthy(const LayerError& e) {
+  return reference_rel_share(e) <= kReferenceDominatesShare && e.top_pixel_share_rel <= kTopPixelShareWarning;
+}
+
 std::vector<std::string> error_warnings(const LayerError& e) {
   std::vector<std::string> w;
-  if (e.mse > 0 && e.reference_variance > kReferenceDominatesShare * e.mse)
-    w.push_back(fmt::format("layer {}: the reference's own error is {:.0f} % of the MSE ({:.3e} of {:.3e}): render the reference "
-                            "longer, or compare with mse - reference_variance",
-                            e.layer, 100 * e.reference_variance / e.mse, e.reference_variance, e.mse));
-  if (e.top_pixel_share > kTopPixelShareWarning)
-    w.push_back(fmt::format("layer {}: the worst {:g} % of pixels hold {:.0f} % of the squared error (fireflies in the estimate or "
-                            "the reference?): MSE is dominated by them; compare relMSE and bias_clamped",
-                            e.layer, 100 * kTopPixelFraction, 100 * e.top_pixel_share));
+  const double mse_share = e.mse > 0 ? e.reference_variance / e.mse : 0.0;
+  if (mse_share > kReferenceDominatesShare || reference_rel_share(e) > kReferenceDominatesShare)
+    w.push_back(fmt::format("layer {}: the reference's own error is {:.0f} % of the MSE ({:.3e} of {:.3e}) and {:.0f} % of relMSE "
+                            "({:.3e} of {:.3e}): render the reference longer, or compare with mse - reference_variance",
+                            e.layer, 100 * mse_share, e.reference_variance, e.mse, 100 * reference_rel_share(e),
+                            e.reference_rel_variance, e.rel_mse));
+  if (e.top_pixel_share > kTopPixelShareWarning || e.top_pixel_share_rel > kTopPixelShareWarning)
+    w.push_back(fmt::format("layer {}: the worst {:g} % of pixels hold {:.0f} % of the squared error and {:.0f} % of relMSE "
+                            "(fireflies in the estimate or the reference?): those errors are dominated by them; compare "
+                            "bias_clamped, and several seeds",
+                            e.layer, 100 * kTopPixelFraction, 100 * e.top_pixel_share, 100 * e.top_pixel_share_rel));
   return w;
 }
 

@@ -19,6 +19,10 @@
 //              the worst kTopPixelFraction of pixels (at least one): ~0.01-0.02 for
 //              Gaussian noise; large when a few pixels (fireflies in the estimate or the
 //              reference) dominate the MSE.
+//   top_pixel_share_rel = the same for relMSE: the fraction of the sum of
+//              (x - r)^2 / (r^2 + eps) held by the worst kTopPixelFraction of pixels (ranked
+//              by that sum over their channels). A bright reference firefly dominates MSE but
+//              not relMSE; a firefly of the estimate where the reference is dark dominates both.
 // Standard-error layers themselves are not compared.
 #include <string>
 #include <vector>
@@ -41,12 +45,31 @@ struct LayerError {
   double reference_mean = 0;  // mean of r over pixels and channels (scale of the layer)
   double bias_clamped = 0, reference_mean_clamped = 0;
   double reference_variance = 0, reference_rel_variance = 0;
-  double top_pixel_share = 0;
+  double top_pixel_share = 0, top_pixel_share_rel = 0;
 };
 
+// The estimate's own error: the measured one minus the reference's own term. With
+// independent seeds and an unbiased reference r of the exact image mu,
+// E[(x - r)^2] = E[(x - mu)^2] + Var(r) and E[se_r^2] = Var(r), so
+// mse - reference_variance is unbiased for the estimate's MSE (variance plus squared
+// bias). relMSE weights each pixel by 1 / (r^2 + eps), a function of the noisy r, so
+// rel_mse - reference_rel_variance is unbiased only to first order in the reference's
+// relative error. Either can come out negative where the reference's term is most of
+// the measured error; the ranking is then not trustworthy (relative_error_trustworthy).
+double own_mse(const LayerError& e);
+double own_rel_mse(const LayerError& e);
+
+// reference_rel_variance / rel_mse: the reference's share of the measured relMSE (0 when rel_mse is 0).
+double reference_rel_share(const LayerError& e);
+
+// Whether relMSE (what the benchmarks rank on) measures the estimate: the reference's
+// share of it is at most kReferenceDominatesShare and the worst 0.1 % of pixels hold at
+// most kTopPixelShareWarning of it.
+bool relative_error_trustworthy(const LayerError& e);
+
 // Human-readable warnings for one layer's error: the reference's own error is more
-// than kReferenceDominatesShare of the MSE, or the worst 0.1 % of pixels hold more
-// than kTopPixelShareWarning of it. Empty when neither holds.
+// than kReferenceDominatesShare of the MSE or of relMSE, or the worst 0.1 % of pixels
+// hold more than kTopPixelShareWarning of either. Empty when none holds.
 std::vector<std::string> error_warnings(const LayerError& e);
 
 // The reference's own error of a layer, from its standard-error layer: the RMS of se

@@ -85,6 +85,12 @@ TEST(ImageError, ReportsTheReferencesOwnErrorAndDominantPixels) {
   EXPECT_NEAR(errors[0].reference_variance, 0.01, 1e-6);
   EXPECT_NEAR(errors[0].mse, 0.0025, 1e-6);
   EXPECT_NEAR(errors[0].top_pixel_share, 1.0 / 1000, 1e-6);  // uniform error: the worst pixel holds 1/1000
+  EXPECT_NEAR(errors[0].top_pixel_share_rel, 1.0 / 1000, 1e-6);
+  // The reference's term (0.01 / 1.01 per value) is 4x the measured relMSE (0.0025 / 1.01).
+  EXPECT_NEAR(reference_rel_share(errors[0]), 4.0, 1e-4);
+  EXPECT_NEAR(own_mse(errors[0]), 0.0025 - 0.01, 1e-6);
+  EXPECT_NEAR(own_rel_mse(errors[0]), (0.0025 - 0.01) / (1 + kRelativeEpsilon), 1e-6);
+  EXPECT_FALSE(relative_error_trustworthy(errors[0]));
   ASSERT_EQ(error_warnings(errors[0]).size(), 1u);
   EXPECT_NE(error_warnings(errors[0])[0].find("reference's own error"), std::string::npos);
   // One firefly: a single pixel holds most of the squared error.
@@ -92,8 +98,22 @@ TEST(ImageError, ReportsTheReferencesOwnErrorAndDominantPixels) {
   ref.layers[1].pixels.assign(n, 0.f);
   errors = image_errors(est, ref);
   EXPECT_GT(errors[0].top_pixel_share, 0.9);
+  EXPECT_GT(errors[0].top_pixel_share_rel, 0.9);  // the reference is not bright there: relMSE is dominated too
+  EXPECT_FALSE(relative_error_trustworthy(errors[0]));
   ASSERT_EQ(error_warnings(errors[0]).size(), 1u);
   EXPECT_NE(error_warnings(errors[0])[0].find("worst"), std::string::npos);
+  // A firefly of the reference (1000 where the rest is 1; the estimate reads 1 there, +-0.5
+  // elsewhere): it holds nearly all the squared error, and ~0.4 % of relMSE, which weights
+  // it by 1 / r^2. relMSE stays a trustworthy measure.
+  for (size_t i = 0; i < n; ++i) est.layers[0].pixels[i] = 1.f + ((i / 3) % 2 ? 0.5f : -0.5f);
+  for (size_t c = 0; c < 3; ++c) ref.layers[0].pixels[c] = 1000.f, est.layers[0].pixels[c] = 1.f;
+  errors = image_errors(est, ref);
+  EXPECT_GT(errors[0].top_pixel_share, 0.99);
+  const double eps = kRelativeEpsilon * std::pow((999.0 * 3 + 3000.0) / 3000.0, 2);
+  const double firefly = 3 * 999.0 * 999.0 / (1e6 + eps), rest = 999 * 3 * 0.25 / (1 + eps);
+  EXPECT_NEAR(errors[0].top_pixel_share_rel, firefly / (firefly + rest), 1e-5);
+  EXPECT_TRUE(relative_error_trustworthy(errors[0]));
+  ASSERT_EQ(error_warnings(errors[0]).size(), 1u);  // on MSE only
   const ReferenceSelfError self = reference_self_error(ref, "total");
   EXPECT_TRUE(self.available);
   EXPECT_EQ(self.rms_stderr, 0.0);

@@ -2,6 +2,7 @@
 //   plot   CSV... -o OUT.svg      RMSE against time / samples, one series per CSV label
 //   table  CSV... --baseline L    markdown efficiency table (last point of each label)
 //   slope  CSV... --baseline L    convergence rate over seeds (one CSV per seed) and relMSE x time
+//   reference-check CSV... --reference REF.exr   is the reference converged enough to rank the CSVs' variants?
 //   cost-growth --out DIR         time per sample against optical depth and grid size
 // CSVs are those of `chlorovdb converge`.
 #include <chrono>
@@ -14,11 +15,15 @@
 #include <CLI/CLI.hpp>
 #include <fmt/format.h>
 
+#include "analysis/image_error.h"
 #include "analysis/loglog_fit.h"
+#include "analysis/reference_convergence.h"
 #include "analysis/svg_plot.h"
 #include "core/error.h"
+#include "core/number.h"
 #include "grids/vdb_file.h"
 #include "integrator/render.h"
+#include "io/image.h"
 #include "scene/scene_loader.h"
 
 using namespace chlorovdb;
@@ -28,15 +33,20 @@ namespace {
 // ---- converge CSVs -------------------------------------------------------
 
 struct Row {
-  std::string label, layer, clock;
+  std::string label, clock;
   int spp = 0;
-  double seconds = 0, budget = 0, mse = 0, rmse = 0, rel_mse = 0, bias = 0, efficiency = 0;
-  double reference_mean = 0, efficiency_rel = 0;
-  double reference_rel_variance = 0, top_pixel_share = 0;  // 0 in CSVs older than these columns
+  double seconds = 0, budget = 0;
+  // The layer's error; columns missing in older CSVs stay 0. `bias` and
+  // `reference_mean` are the clamped ones where the CSV has them.
+  LayerError error;
   // Mean bias relative to the reference's mean, both images clamped at the
   // reference's 99.9th percentile (analysis/image_error.h): about 0 (within
   // noise) for an unbiased estimator; -1: the variant renders nothing of this layer.
-  double relative_bias() const { return reference_mean != 0 ? bias / reference_mean : 0.0; }
+  double relative_bias() const { return error.reference_mean != 0 ? error.bias / error.reference_mean : 0.0; }
+  // Equal-time efficiencies on the estimate's own errors (the reference's term removed):
+  // 0 where that is not positive (the reference's term is the whole measured error).
+  double efficiency() const { return own_mse(error) > 0 && seconds > 0 ? 1.0 / (own_mse(error) * seconds) : 0.0; }
+  double efficiency_rel() const { return own_rel_mse(error) > 0 && seconds > 0 ? 1.0 / (own_rel_mse(error) * seconds) : 0.0; }
 };
 
 // Columns by name (converge's header), so the CSV can grow. `seconds` is the
@@ -58,35 +68,47 @@ std::vector<Row> read_rows(const std::vector<std::string>& files, const std::str
     const auto header = split(line);
     for (size_t i = 0; i < header.size(); ++i) col[header[i]] = i;
     for (const char* need : {"label", "spp", "wall_seconds", "cpu_seconds", "clock", "time_budget", "layer", "mse", "rmse",
-                             "rel_mse", "bias", "reference_mean", "efficiency"})
+                             "rel_mse", "bias", "reference_mean"})
       if (!col.count(need)) throw InputError(file, need, "", "missing column (not a chlorovdb converge CSV?)");
     while (std::getline(f, line)) {
       const auto c = split(line);
       if (c.size() < header.size() || c[col["layer"]] != layer) continue;
+      auto number = [&](const char* name) { return col.count(name) ? std::stod(c[col[name]]) : 0.0; };
       Row r;
       r.label = c[col["label"]];
       r.clock = c[col["clock"]];
       r.spp = std::stoi(c[col["spp"]]);
-      r.seconds = std::stod(c[col[c[col["clock"]] == "cpu" ? "cpu_seconds" : "wall_seconds"]]);
-      r.budget = std::stod(c[col["time_budget"]]);
-      r.layer = c[col["layer"]];
-      r.mse = std::stod(c[col["mse"]]);
-      r.rmse = std::stod(c[col["rmse"]]);
-      r.rel_mse = std::stod(c[col["rel_mse"]]);
-      r.bias = std::stod(c[col["bias"]]);
-      r.efficiency = std::stod(c[col["efficiency"]]);
-      r.reference_mean = std::stod(c[col["reference_mean"]]);
+      r.seconds = number(r.clock == "cpu" ? "cpu_seconds" : "wall_seconds");
+      r.budget = number("time_budget");
+      LayerError& e = r.error;
+      e.layer = layer;
+      e.mse = number("mse");
+      e.rmse = number("rmse");
+      e.rel_mse = number("rel_mse");
+      e.bias = number("bias");
+      e.reference_mean = number("reference_mean");
       if (col.count("bias_clamped")) {  // robust to a reference's fireflies
-        r.bias = std::stod(c[col["bias_clamped"]]);
-        r.reference_mean = std::stod(c[col["reference_mean_clamped"]]);
+        e.bias = number("bias_clamped");
+        e.reference_mean = number("reference_mean_clamped");
       }
-      r.efficiency_rel = col.count("efficiency_rel") ? std::stod(c[col["efficiency_rel"]]) : 0.0;
-      r.reference_rel_variance = col.count("reference_rel_variance") ? std::stod(c[col["reference_rel_variance"]]) : 0.0;
-      r.top_pixel_share = col.count("top_pixel_share") ? std::stod(c[col["top_pixel_share"]]) : 0.0;
+      e.reference_variance = number("reference_variance");
+      e.reference_rel_variance = number("reference_rel_variance");
+      e.top_pixel_share = number("top_pixel_share");
+      e.top_pixel_share_rel = number("top_pixel_share_rel");
       rows.push_back(r);
     }
   }
   return rows;
+}
+
+// The last (largest-effort) row of each label, and the labels in order of appearance.
+std::map<std::string, Row> last_rows(const std::vector<Row>& rows, std::vector<std::string>* labels = nullptr) {
+  std::map<std::string, Row> last;
+  for (const Row& r : rows) {
+    if (!last.count(r.label) && labels) labels->push_back(r.label);
+    if (!last.count(r.label) || r.seconds >= last[r.label].seconds) last[r.label] = r;
+  }
+  return last;
 }
 
 int plot(const std::vector<std::string>& files, const std::string& layer, const std::string& title, const std::string& out,
@@ -102,9 +124,9 @@ int plot(const std::vector<std::string>& files, const std::string& layer, const 
     for (const Row& r : rows)
       if (r.label == label) {
         t.x.push_back(r.seconds);
-        t.y.push_back(r.rmse);
+        t.y.push_back(r.error.rmse);
         s.x.push_back(r.spp);
-        s.y.push_back(r.rmse);
+        s.y.push_back(r.error.rmse);
       }
     by_time.series.push_back(t);
     by_spp.series.push_back(s);
@@ -113,48 +135,89 @@ int plot(const std::vector<std::string>& files, const std::string& layer, const 
   return 0;
 }
 
-// One markdown row per label: its last (largest-effort) point. Gains are on
-// 1/(relMSE x time): relMSE bounds what each pixel contributes where the
+// One markdown row per label: its last (largest-effort) point. Ranked on
+// 1/(own relMSE x time), own relMSE = relMSE minus the reference's own term
+// (analysis/image_error.h): relMSE bounds what each pixel contributes where the
 // reference itself is very bright, so a reference's few unconverged pixels
-// (fireflies) cannot decide the comparison as they do MSE.
+// (fireflies) cannot decide the comparison as they do MSE. A row is marked ⚠ where
+// relMSE does not measure the variant (relative_error_trustworthy: the reference's
+// share of it over 10 %, or the worst 0.1 % of pixels holding over 20 % of it); a
+// sentence under the table names those rows.
 int table(const std::vector<std::string>& files, const std::string& layer, const std::string& baseline) {
   const std::vector<Row> rows = read_rows(files, layer);
   std::vector<std::string> labels;
-  std::map<std::string, Row> last;
-  for (const Row& r : rows) {
-    if (!last.count(r.label)) labels.push_back(r.label);
-    if (!last.count(r.label) || r.seconds >= last[r.label].seconds) last[r.label] = r;
-  }
-  const double base = last.count(baseline) ? last[baseline].efficiency_rel : 0.0;
+  std::map<std::string, Row> last = last_rows(rows, &labels);
+  const double base = last.count(baseline) ? last[baseline].efficiency_rel() : 0.0;
   const std::string clock = rows.empty() ? "wall" : rows.front().clock;
-  fmt::print("| variant | spp | {} s | RMSE | relMSE | mean bias | 1/(MSE·s) | 1/(relMSE·s) | vs {} |\n",
+  fmt::print("| variant | spp | {} s | RMSE | relMSE | ref. share | own relMSE | worst 0.1 % px: relMSE / MSE | mean bias | 1/(MSE·s) "
+             "| 1/(relMSE·s) | vs {} |\n",
              clock == "cpu" ? "CPU" : "wall", baseline);
-  fmt::print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
+  fmt::print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
+  std::vector<std::string> flagged;
+  auto efficiency = [](double e) { return e > 0 ? fmt::format("{:.3e}", e) : std::string("–"); };
   for (const std::string& label : labels) {
     const Row& r = last[label];
-    fmt::print("| {} | {} | {:.2f} | {:.3e} | {:.3e} | {:+.1f} % | {:.3e} | {:.3e} | {} |\n", label, r.spp, r.seconds,
-               r.rmse, r.rel_mse, 100 * r.relative_bias(), r.efficiency, r.efficiency_rel,
-               base > 0 ? fmt::format("{:.2f}×", r.efficiency_rel / base) : "–");
+    const LayerError& e = r.error;
+    const bool trusted = relative_error_trustworthy(e);
+    if (!trusted) flagged.push_back(label);
+    fmt::print("| {}{} | {} | {:.2f} | {:.3e} | {:.3e} | {:.1f} % | {:.3e} | {:.1f} / {:.1f} % | {:+.1f} % | {} | {} | {} |\n", label,
+               trusted ? "" : " ⚠", r.spp, r.seconds, e.rmse, e.rel_mse, 100 * reference_rel_share(e), own_rel_mse(e),
+               100 * e.top_pixel_share_rel, 100 * e.top_pixel_share, 100 * r.relative_bias(), efficiency(r.efficiency()),
+               efficiency(r.efficiency_rel()),
+               base > 0 && r.efficiency_rel() > 0 ? fmt::format("{:.2f}×", r.efficiency_rel() / base) : "–");
+  }
+  if (!flagged.empty()) {
+    std::string names;
+    for (const std::string& l : flagged) names += (names.empty() ? "" : ", ") + l;
+    fmt::print("\n⚠ Not a trustworthy ranking on this layer: {} (the reference's own term is over {:.0f} % of relMSE, or the "
+               "worst {:g} % of pixels hold over {:.0f} % of it).\n",
+               names, 100 * kReferenceDominatesShare, 100 * kTopPixelFraction, 100 * kTopPixelShareWarning);
   }
   return 0;
 }
 
-// "LABEL GAIN BIAS BASELINE_BIAS": the label with the highest 1/(relMSE x time)
+// "LABEL GAIN BIAS BASELINE_BIAS": the label with the highest 1/(own relMSE x time)
 // (among `candidates`, all if empty), its gain over `baseline`, and both
 // relative mean biases in per cent.
 int best(const std::vector<std::string>& files, const std::string& layer, const std::string& baseline,
          const std::vector<std::string>& candidates) {
-  std::map<std::string, Row> last;
-  for (const Row& r : read_rows(files, layer))
-    if (!last.count(r.label) || r.seconds >= last[r.label].seconds) last[r.label] = r;
-  if (!last.count(baseline) || !(last[baseline].efficiency_rel > 0)) throw std::runtime_error("no baseline " + baseline);
+  std::map<std::string, Row> last = last_rows(read_rows(files, layer));
+  if (!last.count(baseline) || !(last[baseline].efficiency_rel() > 0)) throw std::runtime_error("no baseline " + baseline);
   std::string top;
   for (const auto& [label, r] : last) {
     if (!candidates.empty() && std::find(candidates.begin(), candidates.end(), label) == candidates.end()) continue;
-    if (top.empty() || r.efficiency_rel > last[top].efficiency_rel) top = label;
+    if (top.empty() || r.efficiency_rel() > last[top].efficiency_rel()) top = label;
   }
-  fmt::print("{} {:.2f} {:+.1f} {:+.1f}\n", top, last[top].efficiency_rel / last[baseline].efficiency_rel,
+  fmt::print("{} {:.2f} {:+.1f} {:+.1f}\n", top, last[top].efficiency_rel() / last[baseline].efficiency_rel(),
              100 * last[top].relative_bias(), 100 * last[baseline].relative_bias());
+  return 0;
+}
+
+// Whether a reference meets the criterion of analysis/reference_convergence.h
+// against the variants of `files` (their last points), per layer. One line per
+// layer the reference has with a non-zero mean:
+//   LAYER SPP REF_REL_MSE RMS_REL_STDERR BEST_LABEL BEST_OWN_REL_MSE SHARE NEEDED_SPP MET
+// SPP is the reference's spp_done; RMS_REL_STDERR its RMS standard error over its mean;
+// with `budget` > 0 the variants' own relMSE is predicted at that time (a pilot run),
+// NEEDED_SPP the spp that meets the criterion (at most max_spp); MET is yes or no.
+int reference_check(const std::vector<std::string>& files, const std::vector<std::string>& layers,
+                    const std::filesystem::path& reference_file, double budget, int max_spp) {
+  const Image reference = read_exr(reference_file);
+  const MetadataValue* done = reference.metadata.find("spp_done");
+  const double* spp = done ? std::get_if<double>(done) : nullptr;
+  const int* spp_int = done ? std::get_if<int>(done) : nullptr;
+  if (!spp && !spp_int) throw InputError(reference_file.string(), "spp_done", "", "missing (not a `chlorovdb reference` image?)");
+  const int reference_spp = spp_int ? *spp_int : int(*spp);
+  for (const std::string& layer : layers) {
+    const ReferenceSelfError self = reference_self_error(reference, layer);
+    if (!self.available || self.mean == 0) continue;
+    std::vector<VariantError> variants;
+    for (const auto& [label, r] : last_rows(read_rows(files, layer))) variants.push_back({label, r.error, r.seconds});
+    if (variants.empty()) throw InputError(files.empty() ? "" : files.front(), "layer", layer, "no variant has this layer");
+    const ReferenceCheck c = check_reference(self.rel_mse, variants, budget);
+    fmt::print("{} {} {:.4e} {:.4e} {} {:.4e} {:.4e} {} {}\n", layer, reference_spp, self.rel_mse, self.rms_stderr / std::abs(self.mean),
+               c.best_label, c.best_own_rel_mse, c.share, reference_spp_needed(reference_spp, c, max_spp), c.met ? "yes" : "no");
+  }
   return 0;
 }
 
@@ -183,16 +246,16 @@ int slope(const std::vector<std::string>& files, const std::string& layer, const
     std::vector<double> spp, corrected, raw;
     for (const Row& r : rows) {
       spp.push_back(r.spp);
-      corrected.push_back(r.rel_mse - r.reference_rel_variance);
-      raw.push_back(r.rel_mse);
+      corrected.push_back(own_rel_mse(r.error));
+      raw.push_back(r.error.rel_mse);
     }
     l.corrected.push_back(fit_power_law(spp, corrected));
     l.raw.push_back(fit_power_law(spp, raw));
     if (l.spp != 0 && l.spp != rows.back().spp) throw InputError(file, "spp", std::to_string(rows.back().spp), "seeds of one label must end at the same spp");
     l.spp = rows.back().spp;
-    l.rel_mse.push_back(rows.back().rel_mse);
+    l.rel_mse.push_back(rows.back().error.rel_mse);
     l.seconds.push_back(rows.back().seconds);
-    l.top_share.push_back(rows.back().top_pixel_share);
+    l.top_share.push_back(rows.back().error.top_pixel_share);
     l.bias.push_back(rows.back().relative_bias());
   }
   auto mean = [](const std::vector<double>& v) { return mean_over_runs(v).mean; };
@@ -398,6 +461,16 @@ int main(int argc, char** argv) {
   sl->add_option("csv", files)->required();
   sl->add_option("--layer", layer);
   sl->add_option("--baseline", baseline, "Label the efficiency ratios are relative to");
+  CLI::App* rc = app.add_subcommand("reference-check", "Whether a reference is converged enough to rank the variants of converge CSVs");
+  std::vector<std::string> layers = {"total", "fluorescence"};
+  std::string reference;
+  double budget = 0;
+  int max_spp = kMaxSpp;
+  rc->add_option("csv", files)->required();
+  rc->add_option("--reference", reference, "The reference EXR the CSVs were measured against")->required();
+  rc->add_option("--layers", layers, "Layers to check (default: total fluorescence)");
+  rc->add_option("--budget", budget, "Predict the variants' own relMSE at this time from theirs (a pilot run; default: as measured)");
+  rc->add_option("--max-spp", max_spp, "Cap of the needed spp");
   CLI::App* c = app.add_subcommand("cost-growth", "Time per sample against optical depth and grid size");
   bool large = false;
   int threads = 0;
@@ -410,6 +483,7 @@ int main(int argc, char** argv) {
     if (t->parsed()) return table(files, layer, baseline);
     if (b->parsed()) return best(files, layer, baseline, candidates);
     if (sl->parsed()) return slope(files, layer, baseline);
+    if (rc->parsed()) return reference_check(files, layers, reference, budget, max_spp);
     return cost_growth(out, large, threads);
   } catch (const std::exception& e) {
     fmt::print(stderr, "chlorovdb_bench: error: {}\n", e.what());

@@ -3,20 +3,36 @@
 #
 #   cmake --build build --target benchmarks        (or: tools/benchmarks/run.sh)
 #
-# For every scene in scenes/*.json (or $SCENES): a high-sample reference
-# (`chlorovdb reference`, cached and resumed in $OUT), then every estimator
-# variant rendered at EQUAL TIME (`chlorovdb converge --time-budgets`), scored by
-# efficiency = 1 / (relMSE x CPU time) against the reference; then
-# the cost-growth study (chlorovdb_bench cost-growth). Environment knobs:
+# For every scene in scenes/*.json (or $SCENES):
+#  1. a reference (`chlorovdb reference`, seed 1000003, cached and resumed in $OUT) of
+#     REF_SPP samples per pixel;
+#  2. a pilot: every variant for BUDGET/8 CPU seconds against it; `chlorovdb_bench
+#     reference-check` predicts each variant's own relMSE at BUDGET (∝ 1/time) and the
+#     spp at which the reference's own relMSE term (from its standard-error layers) is at
+#     most 10 % of the best variant's, on the total and fluorescence layers
+#     (analysis/reference_convergence.h); the reference is extended (--resume) to that,
+#     at most REF_SPP_MAX;
+#  3. every estimator variant at EQUAL TIME (`chlorovdb converge --time-budgets`), scored
+#     by efficiency = 1 / (own relMSE x CPU time), own relMSE = relMSE minus the
+#     reference's own term; rows where relMSE does not measure the variant (the
+#     reference's share over 10 %, or the worst 0.1 % of pixels holding over 20 % of it)
+#     are marked ⚠; reference-check states, per layer, whether the reference met the
+#     criterion against the variants as measured;
+# then the cost-growth study (chlorovdb_bench cost-growth). Environment knobs:
 #   BUDGET=3         CPU seconds of rendering per variant (also measured at 1/8, 1/4, 1/2 of it);
 #                    CPU time (summed over threads), not wall time, so other load on a shared
 #                    machine does not skew the comparison
-#   REF_SPP=2048     samples per pixel of each reference
+#   REF_SPP=2048     samples per pixel each reference starts with (and the pilot is scored on)
+#   REF_SPP_MAX=8192  cap of a reference's samples per pixel: what bounds a run (at 96x72 the
+#                    default scene costs about 11 CPU-ms per spp, so a reference at the cap
+#                    about 90 CPU-s, 45 s on 2 threads); a reference that reaches it without
+#                    meeting the criterion is reported as not converged
 #   RESOLUTION=96x72  image size of references and variants
 #   THREADS=1        worker threads of the timed variants (one: no idle-thread spinning in the CPU time)
 #   REF_THREADS=2    worker threads of the references
 #   SCENES="scenes/a.json scenes/b.json"   scenes to run (default: scenes/*.json)
 #   OUT=out/benchmarks  references and CSVs (not committed)
+#   DOC=docs/benchmarks.md  the page written; its figures go to ${DOC%.md}/
 #   COST_GROWTH=1    0 skips the cost-growth study; LARGE=1 adds its 512^3 grids
 set -euo pipefail
 cd "$(dirname "$0")/../.."
@@ -25,6 +41,7 @@ CHLOROVDB=${CHLOROVDB:-build/src/cli/chlorovdb}
 CHLOROVDB_BENCH=${CHLOROVDB_BENCH:-build/src/analysis/chlorovdb_bench}
 BUDGET=${BUDGET:-3}
 REF_SPP=${REF_SPP:-2048}
+REF_SPP_MAX=${REF_SPP_MAX:-8192}
 RESOLUTION=${RESOLUTION:-96x72}
 THREADS=${THREADS:-1}
 REF_THREADS=${REF_THREADS:-2}
@@ -32,8 +49,9 @@ OUT=${OUT:-out/benchmarks}
 COST_GROWTH=${COST_GROWTH:-1}
 LARGE=${LARGE:-0}
 REF_SEED=1000003  # the variants use seed 0: reference and estimate must not share samples
-DOC=docs/benchmarks.md
-FIG=docs/benchmarks
+DOC=${DOC:-docs/benchmarks.md}
+FIG=${DOC%.md}
+FIG_LINK=$(basename "$FIG")  # figures are linked relative to the page
 read -r -a scenes <<< "${SCENES:-$(ls scenes/*.json 2>/dev/null | tr '\n' ' ')}"
 
 for tool in "$CHLOROVDB" "$CHLOROVDB_BENCH"; do
@@ -41,6 +59,7 @@ for tool in "$CHLOROVDB" "$CHLOROVDB_BENCH"; do
 done
 mkdir -p "$OUT" "$FIG"
 budgets=$(awk -v b="$BUDGET" 'BEGIN { printf "%g,%g,%g,%g", b / 8, b / 4, b / 2, b }')
+pilot_budget=${budgets%%,*}
 started=$(date +%s)
 
 # variant label | extra flags. The baseline ("default") is the scene's own settings.
@@ -66,32 +85,67 @@ variants_for() {  # $1 scene file
 
 tables=""
 uvb_lines=""
+reference_rows=""
 for scene in "${scenes[@]}"; do
   name=$(basename "$scene" .json)
   dir="$OUT/$name"
   mkdir -p "$dir"
   echo "== $name" >&2
 
-  # Reference: cached across runs, restarted when the scene or the settings change.
-  stamp="$(sha256sum "$scene" | cut -d' ' -f1) $RESOLUTION $REF_SPP"
-  if [ "$(cat "$dir/reference.stamp" 2>/dev/null)" != "$stamp" ]; then rm -f "$dir/reference.exr" "$dir/reference.exr.ckpt"; fi
-  "$CHLOROVDB" reference "$scene" -o "$dir/reference.exr" --spp "$REF_SPP" --resolution "$RESOLUTION" \
-    --seed "$REF_SEED" --threads "$REF_THREADS" --checkpoint-every 30 --resume -q
-  echo "$stamp" > "$dir/reference.stamp"
+  # Reference: cached across runs (its spp in reference.spp), restarted when the scene
+  # or the settings change, extended (--resume) when a run needs more samples.
+  ref="$dir/reference.exr"
+  stamp="$(sha256sum "$scene" | cut -d' ' -f1) $RESOLUTION $REF_SEED"
+  if [ "$(cat "$dir/reference.stamp" 2>/dev/null)" != "$stamp" ]; then rm -f "$ref" "$ref.ckpt" "$dir/reference.spp"; fi
+  render_reference() {  # $1 spp
+    "$CHLOROVDB" reference "$scene" -o "$ref" --spp "$1" --resolution "$RESOLUTION" \
+      --seed "$REF_SEED" --threads "$REF_THREADS" --checkpoint-every 30 --resume -q 2>> "$dir/reference.log"
+    echo "$stamp" > "$dir/reference.stamp"
+    echo "$1" > "$dir/reference.spp"
+  }
+  ref_spp=$(cat "$dir/reference.spp" 2>/dev/null || echo 0)
+  [ "$ref_spp" -ge "$REF_SPP" ] || { ref_spp=$REF_SPP; render_reference "$ref_spp"; }
 
-  csvs=()
-  notes=""
-  while IFS='|' read -r label flags; do
-    csv="$dir/${label//[=]/-}"
-    # shellcheck disable=SC2086
-    if "$CHLOROVDB" converge "$scene" --reference "$dir/reference.exr" --resolution "$RESOLUTION" \
-         --threads "$THREADS" --spp 1 --clock cpu --time-budgets "$budgets" --label "$label" $flags -o "$csv" \
-         > "$csv.log" 2>&1; then
-      csvs+=("$csv.csv")
-    else
-      notes+="| $label | $(grep -m1 'error' "$csv.log" | sed 's/|/\\|/g') |"$'\n'
+  converge_variants() {  # $1 folder, $2 budgets; fills csvs, notes
+    csvs=()
+    notes=""
+    mkdir -p "$1"
+    while IFS='|' read -r label flags; do
+      csv="$1/${label//[=]/-}"
+      # shellcheck disable=SC2086
+      if "$CHLOROVDB" converge "$scene" --reference "$ref" --resolution "$RESOLUTION" \
+           --threads "$THREADS" --spp 1 --clock cpu --time-budgets "$2" --label "$label" $flags -o "$csv" \
+           > "$csv.log" 2>&1; then
+        csvs+=("$csv.csv")
+      else
+        notes+="| $label | $(grep -m1 'error' "$csv.log" | sed 's/|/\\|/g') |"$'\n'
+      fi
+    done < <(variants_for "$scene")
+  }
+  # Pilot at BUDGET/8: how many samples the reference needs (the largest over the layers).
+  converge_variants "$dir/pilot" "$pilot_budget"
+  if [ ${#csvs[@]} -gt 0 ]; then
+    needed=$("$CHLOROVDB_BENCH" reference-check "${csvs[@]}" --reference "$ref" --budget "$BUDGET" --max-spp "$REF_SPP_MAX" |
+      awk -v n="$ref_spp" '$8 > n { n = $8 } END { print n }')
+    if [ "$needed" -gt "$ref_spp" ]; then
+      echo "   reference: $ref_spp -> $needed spp" >&2
+      ref_spp=$needed
+      render_reference "$ref_spp"
     fi
-  done < <(variants_for "$scene")
+  fi
+  converge_variants "$dir" "$budgets"
+
+  # The criterion against the variants as measured at BUDGET, per layer (reference-check's fields).
+  ref_lines=""
+  [ ${#csvs[@]} -eq 0 ] || ref_lines=$("$CHLOROVDB_BENCH" reference-check "${csvs[@]}" --reference "$ref")
+  while read -r layer spp ref_rel rms_rel best_label best_own share _ met; do
+    [ -n "$layer" ] || continue
+    reference_rows+=$(awk -v sc="$name" -v l="$layer" -v spp="$spp" -v rr="$ref_rel" -v rs="$rms_rel" -v b="$best_label" \
+      -v bo="$best_own" -v sh="$share" -v m="$met" -v cap="$REF_SPP_MAX" 'BEGIN {
+        verdict = m == "yes" ? "yes" : (spp + 0 >= cap + 0 ? "**no** (at the cap) ⚠" : "**no** ⚠")
+        printf "| %s | %s | %d | %.2g %% | %.3e | %s (%.3e) | %s | %s |\n", sc, l, spp, 100 * rs, rr, b, bo,
+               sh == "inf" ? "≥ 100 %" : sprintf("%.1f %%", 100 * sh), verdict }')$'\n'
+  done <<< "$ref_lines"
 
   group() {  # $1 title, $2 regex on labels, $3 figure name, $4 layers (first one plotted)
     local files=() layer
@@ -111,8 +165,9 @@ for scene in "${scenes[@]}"; do
   }
   section=$(
     printf '\n### %s\n\n' "$name"
-    printf 'Reference: %s spp at %s (seed %s). Equal time: %s s per variant (also measured at %s s).\n' \
-      "$REF_SPP" "$RESOLUTION" "$REF_SEED" "$BUDGET" "$budgets"
+    printf 'Reference: %s spp at %s (seed %s); its own error and whether it met the criterion: [References](#references).\n' \
+      "$ref_spp" "$RESOLUTION" "$REF_SEED"
+    printf 'Equal time: %s s per variant (also measured at %s s).\n' "$BUDGET" "$budgets"
     group "transmittance estimator (shadow and excitation rays)" '^transmittance' transmittance
     group "fluorescence estimator" '^(fluorescence|excitation|Q)' fluorescence "fluorescence total"
     group "wavelengths per path" '^wavelengths' wavelengths
@@ -128,7 +183,7 @@ for scene in "${scenes[@]}"; do
       --baseline fluorescence=reference --among default fluorescence=direct fluorescence=full)
     read -r _ gain_full full_bias _ < <("$CHLOROVDB_BENCH" best "${fl[@]}" --layer fluorescence \
       --baseline fluorescence=reference --among default)
-    uvb_lines+="- **$name** (fluorescence layer, $BUDGET CPU-s, 1/(relMSE·time)): our most efficient estimator, $best,
+    uvb_lines+="- **$name** (fluorescence layer, $BUDGET CPU-s, 1/(own relMSE·time)): our most efficient estimator, $best,
   is **${gain}×** as efficient as the reference estimator (docs/physics.md §5); our default (auto) is ${gain_full}×.
   Mean bias against the reference image: $best ${best_bias} %, default ${full_bias} %, reference estimator ${ref_bias} %."$'\n'
   fi
@@ -154,29 +209,53 @@ references on ${REF_THREADS}). Do not edit by hand: rerun the command.
 
 ## Method
 
-Each scene in \`scenes/\` gets a reference (\`chlorovdb reference\`, ${REF_SPP} spp, seed ${REF_SEED}, the
-scene's own unbiased settings) and then every variant renders for the same CPU time, on one
-thread, with seed 0 (\`chlorovdb converge --clock cpu --time-budgets\`). Time is the process CPU
-time of the rendering: the machine may be shared with other jobs, and CPU
-time is what other load distorts least. **Efficiency = 1 / (relMSE × time)**, relMSE =
-mean (x − r)² / (r² + 0.01·mean(r)²) over all pixels and channels of a layer (linear RGB);
-higher is better; "vs default" is its ratio to the scene's own settings. 1 / (MSE × time) is
-given too, but do not rank by it on the glass scenes: their references are not converged in a
-few pixels (fireflies — a 2048-spp UVB reference has pixels of 2600 against a mean of 0.6), and
-those pixels alone set every variant's MSE (identical RMSE across variants), while relMSE bounds
-what each such pixel contributes. Both errors include the reference's own variance (about
-spp/${REF_SPP} of a variant's for the same estimator) and the squared bias of a biased variant
-(the thesis's estimator; \`direct\` where it is not exact), as they should. **Noise of the
-measurement**: where a scene already uses 8 wavelengths, \`wavelengths=8\` repeats \`default\`
-exactly (same samples), so their difference is the timing noise alone. Metrics and the plots'
-−1/2 guide: [convergence.md](convergence.md).
+Each scene in \`scenes/\` gets a reference (\`chlorovdb reference\`, seed ${REF_SEED}, the scene's own
+unbiased settings) and then every variant renders for the same CPU time, on one thread, with
+seed 0 (\`chlorovdb converge --clock cpu --time-budgets\`). Time is the process CPU time of the
+rendering: the machine may be shared with other jobs, and CPU time is what other load distorts
+least. relMSE = mean (x − r)² / (r² + 0.01·mean(r)²) over all pixels and channels of a layer
+(linear RGB). Metrics and the plots' −1/2 guide: [convergence.md](convergence.md).
+
+**Converged references.** The measured relMSE is the variant's own (its variance plus its
+squared bias) plus the reference's own variance term, mean se_r² / (r² + 0.01·mean(r)²) from
+the reference's standard-error layers (its *own relMSE term*). A reference counts as converged
+on a layer when that term is at most 10 % of the smallest own relMSE among the scene's variants
+at the full budget (analysis/reference_convergence.h): it then changes no variant's error by
+more than 10 %, before the correction below. Each reference starts at ${REF_SPP} spp; a pilot
+(every variant for ${pilot_budget} CPU-s) predicts each variant's own relMSE at ${BUDGET} s as ∝ 1/time
+(for a biased or heavy-tailed variant, whose relMSE falls more slowly, this asks for more
+reference than needed), and the reference is extended to the spp its term ∝ 1/spp needs for
+the criterion, at most ${REF_SPP_MAX} spp (the bound of the run). [References](#references)
+gives, per scene and layer, the spp reached, the reference's own error and whether it met the
+criterion against the variants as finally measured.
+
+**Efficiency = 1 / (own relMSE × time)**, own relMSE = measured relMSE − the reference's own
+term; higher is better; "vs default" is its ratio to the scene's own settings. The subtraction
+is the right estimator here: reference and variant use different seeds (independent) and the
+reference is unbiased, so E[(x − r)²] = E[(x − μ)²] + Var(r) with E[se_r²] = Var(r) (μ the exact
+image); for relMSE, whose weights 1/(r² + ε) use the noisy r, it holds to first order in the
+reference's relative error (test \`ReferenceConvergence.OwnRelMseAgainstANoisyReferenceMatchesTheErrorAgainstTheExactImage\`).
+Without it, a reference's term common to all variants would pull their efficiencies together.
+1 / (MSE × time) (also with the reference's term removed) is given too, but do not rank by it on
+the glass scenes: a reference's few unconverged pixels (fireflies: rare, very bright samples)
+alone can set every variant's MSE, while relMSE bounds what each such pixel contributes.
+
+**Warnings (⚠).** Per row, *ref. share* is the reference's own term as a share of the measured
+relMSE, and *worst 0.1 % px* the share of the relMSE sum (and of the squared-error sum) held by
+the worst 0.1 % of pixels (about 1–2 % for Gaussian noise). A row is marked ⚠, and named in a
+sentence under its table, where the reference's share is over 10 % or the worst 0.1 % of pixels
+hold over 20 % of relMSE: there a few pixels (or the reference) set the error, one seed's
+relMSE is not a measurement of the estimator's, and the ranking of that row is not trustworthy.
+A reference that did not meet the criterion is marked ⚠ in [References](#references).
+**Noise of the measurement**: where a scene already uses 8 wavelengths, \`wavelengths=8\`
+repeats \`default\` exactly (same samples), so their difference is the timing noise alone.
 
 The **mean bias** column is the mean of (estimate − reference) over the image relative to the
 reference's mean, both clamped at the reference's 99.9th percentile (so the reference's fireflies
 do not set it): within noise of 0 for an unbiased estimator, −100 % for a variant that renders
 nothing of that layer. At a few hundred samples a heavy-tailed estimator (rare, bright samples)
-also shows a negative mean bias: it has not yet drawn the rare samples that the 2048-spp
-reference holds. The fluorescence estimators are compared on the fluorescence layer (the total
+also shows a negative mean bias: it has not yet drawn the rare samples that the reference
+holds. The fluorescence estimators are compared on the fluorescence layer (the total
 layer is dominated by light that never fluoresced, the same for all of them).
 
 Variants: transmittance estimator of shadow and excitation rays (delta / ratio / residual ratio,
@@ -192,6 +271,17 @@ path (\`--wavelengths\`); and the renderer's skips of unneeded work
 with its error.
 
 ## Results
+
+### References
+
+Per scene and layer: the reference's samples per pixel, its RMS standard error relative to its
+mean, its own relMSE term, the variant with the smallest own relMSE at ${BUDGET} s (and that
+relMSE), the reference's term as a share of it, and whether that share is at most 10 % (the
+criterion; at most ${REF_SPP_MAX} spp).
+
+| scene | layer | spp | RMS std. error / mean | own relMSE term | best variant (own relMSE) | share | converged |
+| --- | --- | ---: | ---: | ---: | --- | ---: | --- |
+${reference_rows}
 ${tables}
 ## Our estimators against the thesis's, on the scenes lit by UVB
 
@@ -201,7 +291,7 @@ renders almost no fluorescence (its mean bias is the last figure of each line). 
 then its squared relative bias, about 1, and does not fall with time; an unbiased estimator's
 falls as 1/time, so these equal-time ratios grow in proportion to the budget. Below 1, our
 estimator is still noisier at this budget than rendering nothing (heavy tails of \`full\` in
-glass: docs/fluorescence.md); the reference images hold the same fireflies.
+glass: docs/fluorescence.md). Where the fluorescence table marks these rows ⚠, so are these ratios.
 ${uvb_lines:-No scene lit by a UVB lamp with a fluorescent pigment was benchmarked.}
 
 ## Cost growth
@@ -210,7 +300,7 @@ CPU time per camera sample (summed over threads; 32×32 image, 4 wavelengths, ma
 medium whose density pattern spans 0.2–1 (so majorants are loose), lit by a distant light and
 an environment. Optical depth τ = σ_t across the cube where density = 1; k is the fitted
 exponent over τ ≥ 10. Grid size at τ = 10 (albedo 0.9), dense and sparse (a ball holding 11 %
-of the voxels). Figure: [cost_growth.svg](benchmarks/cost_growth.svg).
+of the voxels). Figure: [cost_growth.svg](${FIG_LINK}/cost_growth.svg).
 
 ${cost:-Not run (COST_GROWTH=0).}
 EOF
