@@ -12,9 +12,11 @@
 #include "film/film.h"
 #include "integrator/render.h"
 #include "scene/scene_loader.h"
+#include "render_image.h"
 #include "test_seed.h"
 
 using namespace chlorovdb;
+using chlorovdb::test::render_image;
 using chlorovdb::test::test_seed;
 
 namespace {
@@ -26,15 +28,6 @@ VariantError variant(const std::string& label, double rel_mse, double reference_
   v.error.reference_rel_variance = reference_rel_variance;
   v.seconds = seconds;
   return v;
-}
-
-Image render_image(const Scene& scene, uint64_t seed, int spp) {
-  Film film(scene.settings.width, scene.settings.height, film_layer_names(), scene.settings.color_space);
-  RenderOptions o;
-  o.spp = spp;
-  o.seed = seed;
-  render(scene, film, o);
-  return film.to_image(spp);
 }
 
 }  // namespace

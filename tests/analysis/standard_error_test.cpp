@@ -11,23 +11,12 @@
 #include "film/film.h"
 #include "integrator/render.h"
 #include "scene/scene_loader.h"
+#include "render_image.h"
 #include "test_seed.h"
 
 using namespace chlorovdb;
+using chlorovdb::test::render_image;
 using chlorovdb::test::test_seed;
-
-namespace {
-
-Image render_image(const Scene& scene, uint64_t seed, int spp) {
-  Film film(scene.settings.width, scene.settings.height, film_layer_names(), scene.settings.color_space);
-  RenderOptions o;
-  o.spp = spp;
-  o.seed = seed;
-  render(scene, film, o);
-  return film.to_image(spp);
-}
-
-}  // namespace
 
 // R renders with different seeds. Per pixel p and channel, two unbiased estimates
 // of Var(mean of n samples): the between-render variance s_b² (R - 1 dof) and the
