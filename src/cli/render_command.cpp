@@ -22,6 +22,7 @@
 #include "checkpoint/partition.h"
 #include "analysis/scene_variant.h"
 #include "cli/commands.h"
+#include "integrator/continuation_guide_training.h"
 #include "cli/scene_overrides.h"
 #include "cli/stopping_options.h"
 #include "core/error.h"
@@ -165,7 +166,8 @@ int render(const RenderArgs& a) {
   png.replace_extension(".png");
 
   if (root && scene.has_fluorescence())
-    fmt::print(stderr, "fluorescence: {} ({})\n", to_string(s.fluorescence), s.fluorescence_reason);
+    fmt::print(stderr, "fluorescence: {} ({}){}\n", to_string(s.fluorescence), s.fluorescence_reason,
+               uses_continuation_guides(scene) ? "; continuation directions guided" : "");
   RenderOutcome r = [&] {
     InterruptScope interrupts;
     return run_render_session(scene, job);

@@ -157,9 +157,30 @@ float direct_excitation(const Scene& scene, const FluorescentPigment& fp, const 
 }
 
 // Same quantity for the fluence that did not come straight from a light:
-// an excitation path at λ'' in a uniformly sampled direction.
+// an excitation path at λ'' in a direction from the medium's continuation guide
+// (uniform where it has none).
 float indirect_excitation(const Scene& scene, const FluorescentPigment& fp, const Vec3& x, int medium, float c,
                           Rng& rng, PathStats& stats, int depth, float p_continue, float* lambda_excitation) {
+  float pdf_lambda;
+  const float lp = sample_continuation_wavelength(fp, rng, &pdf_lambda);
+  *lambda_excitation = lp;
+  const float eps = fp.epsilon(lp);
+  if (eps == 0.f) return 0.f;
+
+  ++stats.excitation_continuations;
+  const ContinuationGuide* guide = scene.continuation_guide(medium);
+  const float u_mix = guide ? rng.uniform() : 0.f;
+  const Point2 u{rng.uniform(), rng.uniform()};
+  const DirectionSample dir =
+      guide ? guide->sample(x, u_mix, u) : DirectionSample{sample_uniform_sphere(u), uniform_sphere_pdf()};
+  const float radiance = continuation_radiance(scene, x, medium, dir.w, lp, rng, stats, depth);
+  const float fluence = radiance / (dir.pdf * pdf_lambda * p_continue);
+  return lp * kAbsorptionPerMolarExtinction * eps * c * fluence;
+}
+
+}  // namespace
+
+float sample_continuation_wavelength(const FluorescentPigment& fp, Rng& rng, float* pdf) {
   const float range = kLambdaMax - kLambdaMinUV;
   const float light_share = fp.lights.empty() ? 0.f : 1.f - kUniformWavelengthShare;
   float lp;
@@ -170,27 +191,22 @@ float indirect_excitation(const Scene& scene, const FluorescentPigment& fp, cons
   } else {
     lp = kLambdaMinUV + rng.uniform() * range;
   }
-  float pdf_lambda = (1.f - light_share) / range;
+  *pdf = (1.f - light_share) / range;
   for (size_t l = 0; l < fp.lights.size(); ++l)
-    pdf_lambda += light_share * fp.light_sampler.pmf(fp.lights[l]) * excitation_pdf(fp.excitation[l], lp);
-  *lambda_excitation = lp;
-  const float eps = fp.epsilon(lp);
-  if (eps == 0.f) return 0.f;
+    *pdf += light_share * fp.light_sampler.pmf(fp.lights[l]) * excitation_pdf(fp.excitation[l], lp);
+  return lp;
+}
 
-  ++stats.excitation_continuations;
-  SampledWavelengths wl = SampledWavelengths::single(lp);
-  const Vec3 w = sample_uniform_sphere(Point2{rng.uniform(), rng.uniform()});
+float continuation_radiance(const Scene& scene, const Vec3& x, int medium, const Vec3& w, float lambda, Rng& rng,
+                            PathStats& stats, int depth) {
+  SampledWavelengths wl = SampledWavelengths::single(lambda);
   PathOptions options;
   options.skip_emitters_on_first_segment = true;
   options.skip_emitters_the_connection_owns = scene.settings.excitation_through_glass == ExcitationThroughGlass::connect;
   options.fluorescence_depth = depth + 1;
   const PathRadiance sub = trace_path_from(scene, Ray{x, w}, medium, wl, rng, stats, options);
-  const float radiance = sub.fluorescence[0] + sub.other[0];
-  const float fluence = radiance / (uniform_sphere_pdf() * pdf_lambda * p_continue);
-  return lp * kAbsorptionPerMolarExtinction * eps * c * fluence;
+  return sub.fluorescence[0] + sub.other[0];
 }
-
-}  // namespace
 
 SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, float t_end, int medium,
                                             PreparedMedia& media, Rng& rng, PathStats& stats, int depth,

@@ -20,6 +20,17 @@ SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, 
                                             PreparedMedia& media, Rng& rng, PathStats& stats, int depth,
                                             int* continuations);
 
+// An excitation continuation's wavelength λ'': the pigment's lights' excitation
+// tables (by their selection probability) mixed with a uniform share over
+// 250–830 nm, so re-emitted light can be reabsorbed; *pdf its density.
+float sample_continuation_wavelength(const FluorescentPigment& fp, Rng& rng, float* pdf);
+// Radiance at λ arriving at x (in `medium`) from direction w that an excitation
+// continuation counts: no emitter on the first segment (the excitation ray
+// counts those), nor the paths the glass connection owns; nested events at
+// depth + 1. Training the continuation guides probes the same quantity.
+float continuation_radiance(const Scene& scene, const Vec3& x, int medium, const Vec3& w, float lambda, Rng& rng,
+                            PathStats& stats, int depth);
+
 // The thesis's estimator (docs/physics.md §5), kept to measure its bias and cost:
 // called when the hero wavelength is absorbed at `p`; with probability Q it
 // becomes a fluorescence event that samples λ_e uniformly below λ within the

@@ -11,6 +11,7 @@
 #include <tbb/task_arena.h>
 
 #include "integrator/aov.h"
+#include "integrator/continuation_guide_training.h"
 #include "io/progress.h"
 
 namespace chlorovdb {
@@ -98,6 +99,9 @@ RenderStats render(const Scene& scene, Film& film, const RenderOptions& options)
   tbb::task_arena arena(options.threads > 0 ? options.threads : tbb::task_arena::automatic);
   std::unique_ptr<Progress> progress;
   if (options.show_progress) progress = std::make_unique<Progress>(int64_t(tiles.size()) * (options.spp - options.samples_done), "render");
+
+  // Learned from the scene before the first pass, once per scene; its time is part of the render's.
+  arena.execute([&] { result.guide_seconds = prepare_continuation_guides(scene); });
 
   auto stopped = [&] { return options.stop && options.stop->load(std::memory_order_relaxed); };
   int done = options.samples_done;

@@ -2,11 +2,13 @@
 // Everything a render needs, built once from a scene file (scene_loader.h) and
 // then read-only: safe to share between render threads.
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "camera/camera.h"
 #include "film/film.h"
+#include "fluorescence/continuation_guide.h"
 #include "fluorescence/fluorescent_pigment.h"
 #include "geometry/geometry_scene.h"
 #include "lights/light.h"
@@ -40,6 +42,11 @@ enum class QuantumYieldMode { weight, roulette };
 //  block   — stop (exact with `full`: light through glass then arrives only by
 //            continuation paths, which cannot reach delta lights).
 enum class ExcitationThroughGlass { connect, fresnel, block };
+// The first direction of an excitation continuation (full mode): uniform over
+// the sphere, or from the medium's guide learned before the render, mixed with
+// uniform (guided; measured no better on the default scene, kept to measure:
+// docs/fluorescence.md, "Guided continuations").
+enum class ContinuationDirections { uniform, guided };
 
 struct RenderSettings {
   int width = 512, height = 512;
@@ -61,6 +68,7 @@ struct RenderSettings {
   // paths carrying no emission wavelength). Off only to measure each skip.
   bool skip_unneeded_work = true;
   ExcitationThroughGlass excitation_through_glass = ExcitationThroughGlass::connect;
+  ContinuationDirections continuation_directions = ContinuationDirections::uniform;
   // Both kept to measure what the defaults buy (docs/fluorescence.md); neither
   // applies to the `reference` estimator, which always draws λ' uniformly below
   // λ and uses Q as a roulette, as the thesis does.
@@ -109,6 +117,10 @@ struct Scene {
   std::vector<bool> medium_scatters;  // anything in it scatters (molecules or particles)
   std::vector<MediumPolicy> medium_policy;  // per medium, resolved at load (resolve_medium_policies)
   std::vector<std::vector<FluorescentPigment>> fluorescence;  // per medium
+  // Per medium, where excitation continuations go first. Learned from the scene
+  // itself, so the first render() trains them (integrator/continuation_guide_training.h)
+  // and later renders reuse them; null, or an empty guide: uniform directions.
+  mutable std::shared_ptr<const std::vector<ContinuationGuide>> continuation_guides;
   int camera_medium = -1;
   std::vector<Sensor> sensors;  // by name
   std::vector<std::string> warnings;  // loader's doubts about the scene (e.g. a grid's length unit); printed by render
@@ -131,6 +143,12 @@ struct Scene {
         p.estimator = TransmittanceEstimator::residual_ratio;
       else p.estimator = settings.transmittance;
     }
+  }
+
+  const ContinuationGuide* continuation_guide(int medium) const {
+    if (!continuation_guides || medium < 0 || size_t(medium) >= continuation_guides->size()) return nullptr;
+    const ContinuationGuide& g = (*continuation_guides)[size_t(medium)];
+    return g.empty() ? nullptr : &g;
   }
 
   bool has_fluorescence() const {

@@ -102,6 +102,10 @@ RenderSettings read_render_settings(ParamReader& top, const SceneOverrides& o, s
     s.excitation_through_glass = glass == "fresnel" ? ExcitationThroughGlass::fresnel
                                  : glass == "block" ? ExcitationThroughGlass::block
                                                     : ExcitationThroughGlass::connect;
+    s.continuation_directions =
+        r->get_enum("continuation_directions", "uniform", {"uniform", "guided"}) == "guided"
+            ? ContinuationDirections::guided
+            : ContinuationDirections::uniform;
     s.excitation_sampling = r->get_enum("excitation_sampling", "importance", {"importance", "uniform"}) == "uniform"
                                 ? ExcitationSampling::uniform
                                 : ExcitationSampling::importance;

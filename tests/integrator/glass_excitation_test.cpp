@@ -94,18 +94,7 @@ std::string cuvette_json(const std::string& mode, const std::string& glass, cons
 
 // Mean fluorescence (over four red lanes) along the camera ray through the cuvette's centre.
 Estimate cuvette_fluorescence(const Scene& scene, int paths, uint64_t seed) {
-  constexpr float kLambdas[4] = {640.f, 650.f, 660.f, 670.f};
-  const float pdf[4] = {1, 1, 1, 1};
-  Estimate e;
-  PathStats stats;
-  for (int i = 0; i < paths; ++i) {
-    Rng rng(test_seed(seed), uint64_t(i));
-    SampledWavelengths lambda = SampledWavelengths::from_values(kLambdas, pdf, 4);
-    const PathRadiance L =
-        trace_path(scene, Ray{{0, 0.03f, 0.2f}, {0, 0, -1}}, scene.camera_medium, lambda, rng, stats);
-    e.add(L.fluorescence.average(4));
-  }
-  return e;
+  return red_fluorescence_along(scene, Ray{{0, 0.03f, 0.2f}, {0, 0, -1}}, paths, seed);
 }
 
 // A dye that absorbs only in the UVB (280–330 nm) and emits in the red: it never

@@ -10,6 +10,7 @@
 
 #include "integrator/path_tracer.h"
 #include "scene/scene_loader.h"
+#include "test_seed.h"
 
 namespace chlorovdb::test {
 
@@ -31,6 +32,22 @@ struct Estimate {
   double mean() const { return sum / n; }
   double sigma() const { return std::sqrt(std::max(0.0, sum2 / n - mean() * mean()) / n); }
 };
+
+// Mean fluorescence over four red lanes (640-670 nm) along one camera ray, from
+// `paths` paths whose streams are (test_seed(seed), i).
+inline Estimate red_fluorescence_along(const Scene& scene, const Ray& ray, int paths, uint64_t seed) {
+  constexpr float kLambdas[4] = {640.f, 650.f, 660.f, 670.f};
+  const float pdf[4] = {1, 1, 1, 1};
+  Estimate e;
+  PathStats stats;
+  for (int i = 0; i < paths; ++i) {
+    Rng rng(test_seed(seed), uint64_t(i));
+    SampledWavelengths lambda = SampledWavelengths::from_values(kLambdas, pdf, 4);
+    const PathRadiance L = trace_path(scene, ray, scene.camera_medium, lambda, rng, stats);
+    e.add(L.fluorescence.average(4));
+  }
+  return e;
+}
 
 // Slab of pigment solution, index-matched (interface box), thickness D metres,
 // wide enough that its edges do not matter, lit at normal incidence by a
