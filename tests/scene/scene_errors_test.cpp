@@ -132,6 +132,15 @@ TEST(SceneErrors, UnknownExcitationSamplingOrQuantumYieldMode) {
             "");
 }
 
+TEST(SceneErrors, UnknownContinuationDirections) {
+  const std::string msg = load_error(scene_with(R"("render": {"continuation_directions": "guidded"})"), "bad_guide.json");
+  EXPECT_NE(msg.find("bad_guide.json"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("render.continuation_directions"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("guidded"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("did you mean \"guided\""), std::string::npos) << msg;
+  EXPECT_EQ(load_error(scene_with(R"("render": {"continuation_directions": "guided"})")), "");
+}
+
 TEST(SceneErrors, MissingMeshFileNamesTheFile) {
   const std::string msg = load_error(scene_with(R"(
     "materials": {"white": {"type": "diffuse"}},
