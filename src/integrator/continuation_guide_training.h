@@ -1,11 +1,11 @@
 #pragma once
 // Learns a scene's continuation guides (fluorescence/continuation_guide.h) from
 // probe paths: in each cell of a coarse grid over a fluorescent medium, a few
-// points inside the medium where the pigment is; from each, one continuation
+// points inside the medium where the pigment is; from each, a few continuations
 // (integrator/fluorescence_event.h, continuation_radiance) per direction bin,
-// at a λ'' drawn as a continuation draws it. A bin's weight is the mean of
-// λ''·ε(λ'')·L / p(λ''), the continuation's own integrand, so the guide
-// samples directions roughly in proportion to what they return. Each cell's
+// at a λ'' drawn as a continuation draws it. A bin's weight is the root mean
+// square of v = λ''·ε(λ'')·L / p(λ''), the continuation's own integrand (the
+// variance-optimal density for a noisy integrand is ∝ √E[v²]). Each cell's
 // histogram is mixed with a quarter of the medium's mean one, so a cell whose
 // few probes missed a bright direction still finds it sometimes.
 //

@@ -46,7 +46,6 @@ struct RenderOptions {
 
 struct RenderStats {
   double seconds = 0;
-  double guide_seconds = 0;  // of `seconds`, training the continuation guides (0 once trained)
   int samples_done = 0;  // complete passes: every pixel has this many samples (including options.samples_done; at most its pixel_spp)
   bool interrupted = false;
   bool stopped_after_pass = false;  // stop_after_pass ended the render before spp

@@ -1,7 +1,6 @@
 // Guided excitation continuations (fluorescence/continuation_guide.h,
-// integrator/continuation_guide_training.h): the same fluorescence as uniform
-// directions, with less variance where indirect excitation comes from a few
-// bright places.
+// integrator/continuation_guide_training.h): what training learns, and the
+// same fluorescence as uniform directions.
 #include <gtest/gtest.h>
 
 #include "integrator/continuation_guide_training.h"
