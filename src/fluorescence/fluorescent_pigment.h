@@ -14,7 +14,8 @@ namespace chlorovdb {
 
 // One fluorescent pigment of one medium, with what excitation needs: the
 // lights that can excite it (others are never picked) and, per such light, the
-// λ' sampler ∝ S_light·ε·λ'.
+// λ' sampler ∝ S_light·ε·λ'; and, for reabsorption, one λ'' sampler per
+// fluorescent pigment of the scene whose emission this one absorbs.
 struct FluorescentPigment {
   int pigment = 0;  // index into the medium's pigments
   float quantum_yield = 0.f;
@@ -24,6 +25,12 @@ struct FluorescentPigment {
   std::vector<int> lights;                     // lights that can excite it
   std::vector<ExcitationSampler> excitation;   // parallel to `lights`
   LightSampler light_sampler;                  // over `lights`, weighted by excitation power
+  // ∝ emission_k·ε·λ'' per emitting pigment k (the light reabsorbed here is
+  // fluorescence): the continuation's λ'' mixture draws from these so
+  // re-emitted light is found where the emission and absorption bands overlap.
+  // A table is picked with probability ∝ Q_k · its total (the overlap).
+  std::vector<ExcitationSampler> reabsorption;
+  Distribution1D reabsorption_choice;  // over `reabsorption`
   // Some listed light shines in the absorption band (a light kept only to
   // measure the cost of not skipping dark lights does not count).
   bool excitation_possible() const {

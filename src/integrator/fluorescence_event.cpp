@@ -22,9 +22,19 @@ float continuation_probability(int depth, int spawned) {
   return std::ldexp(1.f, -(depth + 1)) / float((1 + spawned) * (1 + spawned));
 }
 constexpr int kMaxContinuationDepth = 8;
-// Share of continuation wavelengths drawn uniformly over 250–830 nm so the pdf
-// is positive wherever re-emitted fluorescence can be reabsorbed.
-constexpr float kUniformWavelengthShare = 0.2f;
+// The continuation's λ'' mixture: the lights' excitation tables, the
+// reabsorption tables (emission·ε: re-emitted light), and a uniform share over
+// 250–830 nm so the pdf is positive wherever any light can be absorbed.
+constexpr float kUniformWavelengthShare = 0.05f;
+constexpr float kReabsorptionWavelengthShare = 0.2f;
+struct ContinuationShares {
+  float light, reabsorption, uniform;
+};
+ContinuationShares continuation_shares(const FluorescentPigment& fp) {
+  const float reabsorption = fp.reabsorption.empty() ? 0.f : kReabsorptionWavelengthShare;
+  const float light = fp.lights.empty() ? 0.f : 1.f - kUniformWavelengthShare - reabsorption;
+  return {light, reabsorption, 1.f - light - reabsorption};
+}
 
 // Where on the segment to evaluate the source: a mixture of uniform (excitation
 // may peak anywhere) and exponential at the attenuation of the emitted light
@@ -180,20 +190,30 @@ float indirect_excitation(const Scene& scene, const FluorescentPigment& fp, cons
 
 }  // namespace
 
+float continuation_wavelength_pdf(const FluorescentPigment& fp, float lambda) {
+  if (!(lambda >= kLambdaMinUV && lambda < kLambdaMax)) return 0.f;
+  const ContinuationShares share = continuation_shares(fp);
+  float pdf = share.uniform / (kLambdaMax - kLambdaMinUV);
+  for (size_t l = 0; l < fp.lights.size(); ++l)
+    pdf += share.light * fp.light_sampler.pmf(fp.lights[l]) * excitation_pdf(fp.excitation[l], lambda);
+  for (size_t k = 0; k < fp.reabsorption.size(); ++k)
+    pdf += share.reabsorption * fp.reabsorption_choice.pmf(int(k)) * fp.reabsorption[k].pdf(lambda);
+  return pdf;
+}
+
 float sample_continuation_wavelength(const FluorescentPigment& fp, Rng& rng, float* pdf) {
-  const float range = kLambdaMax - kLambdaMinUV;
-  const float light_share = fp.lights.empty() ? 0.f : 1.f - kUniformWavelengthShare;
-  float lp;
-  if (rng.uniform() < light_share) {
-    float pdf_unused;
+  const ContinuationShares share = continuation_shares(fp);
+  const float u = rng.uniform();
+  float lp, pdf_unused;
+  if (u < share.light) {
     const auto pick = fp.light_sampler.sample(rng.uniform());
     lp = sample_excitation(fp.excitation[fp.slot_of_light(pick->index)], rng.uniform(), &pdf_unused);
+  } else if (u < share.light + share.reabsorption) {
+    lp = fp.reabsorption[fp.reabsorption_choice.sample(rng.uniform())].sample(rng.uniform(), &pdf_unused);
   } else {
-    lp = kLambdaMinUV + rng.uniform() * range;
+    lp = kLambdaMinUV + rng.uniform() * (kLambdaMax - kLambdaMinUV);
   }
-  *pdf = (1.f - light_share) / range;
-  for (size_t l = 0; l < fp.lights.size(); ++l)
-    *pdf += light_share * fp.light_sampler.pmf(fp.lights[l]) * excitation_pdf(fp.excitation[l], lp);
+  *pdf = continuation_wavelength_pdf(fp, lp);
   return lp;
 }
 

@@ -20,10 +20,13 @@ SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, 
                                             PreparedMedia& media, Rng& rng, PathStats& stats, int depth,
                                             int* continuations);
 
-// An excitation continuation's wavelength λ'': the pigment's lights' excitation
-// tables (by their selection probability) mixed with a uniform share over
-// 250–830 nm, so re-emitted light can be reabsorbed; *pdf its density.
+// An excitation continuation's wavelength λ'': a mixture of the pigment's
+// lights' excitation tables (75 %, by their selection probability), its
+// reabsorption tables (20 %, emission·ε: re-emitted light is found where the
+// bands overlap) and a uniform 5 % over 250–830 nm; *pdf its density.
 float sample_continuation_wavelength(const FluorescentPigment& fp, Rng& rng, float* pdf);
+// That mixture's density at λ (per nm).
+float continuation_wavelength_pdf(const FluorescentPigment& fp, float lambda);
 // Radiance at λ arriving at x (in `medium`) from direction w that an excitation
 // continuation counts: no emitter on the first segment (the excitation ray
 // counts those), nor the paths the glass connection owns; nested events at

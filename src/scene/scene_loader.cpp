@@ -376,6 +376,24 @@ void setup_fluorescence(Scene& scene, const std::string& mode) {
       if (!fp.lights.empty()) fp.light_sampler = LightSampler(fp.lights, relative_weights(weights));
     }
   }
+  // Reabsorption: every fluorescent pigment's emission against every pigment's
+  // absorption (the emitter may sit in another medium). Always by importance:
+  // render.excitation_sampling measures the lights' tables only.
+  std::vector<const FluorescentPigment*> emitters;
+  for (const auto& pigments : scene.fluorescence)
+    for (const FluorescentPigment& fp : pigments) emitters.push_back(&fp);
+  for (auto& pigments : scene.fluorescence)
+    for (FluorescentPigment& fp : pigments) {
+      std::vector<float> weights;
+      for (const FluorescentPigment* emitter : emitters) {
+        ExcitationSampler es(emitter->emission, fp.epsilon, ExcitationSampling::importance);
+        const float w = emitter->quantum_yield * es.total();
+        if (!(w > 0.f)) continue;
+        fp.reabsorption.push_back(std::move(es));
+        weights.push_back(w);
+      }
+      if (!weights.empty()) fp.reabsorption_choice = Distribution1D(weights);
+    }
   RenderSettings& s = scene.settings;
   if (mode == "off") {
     s.fluorescence = FluorescenceMode::off;
