@@ -23,7 +23,9 @@ SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, 
 // An excitation continuation's wavelength λ'': a mixture of the pigment's
 // lights' excitation tables (75 %, by their selection probability), its
 // reabsorption tables (20 %, emission·ε: re-emitted light is found where the
-// bands overlap) and a uniform 5 % over 250–830 nm; *pdf its density.
+// bands overlap) and a uniform 5 % over 250–830 nm. Without reabsorption
+// tables the lights take their share; without lights, the uniform part does.
+// *pdf is the density.
 float sample_continuation_wavelength(const FluorescentPigment& fp, Rng& rng, float* pdf);
 // That mixture's density at λ (per nm).
 float continuation_wavelength_pdf(const FluorescentPigment& fp, float lambda);
