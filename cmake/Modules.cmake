@@ -1,9 +1,12 @@
-# chlorovdb_module(NAME DEPS <targets...>)
+# chlorovdb_module(NAME DEPS <targets...> [DEFINES ...] [PCH <headers...>])
 #   Builds src/NAME/*.cpp into the static library chlorovdb_NAME. A folder with
 #   only headers becomes an INTERFACE library. Include paths are rooted at src/,
 #   so code writes #include "spectra/spectrum.h". DEFINES are public compile definitions.
+#   PCH names third-party headers that most of the module's files include and
+#   that take seconds to parse (nlohmann/json, CLI11): they are parsed once per
+#   module instead of once per file (CI builds from cold twice).
 function(chlorovdb_module name)
-  cmake_parse_arguments(ARG "" "" "DEPS;DEFINES" ${ARGN})
+  cmake_parse_arguments(ARG "" "" "DEPS;DEFINES;PCH" ${ARGN})
   file(GLOB sources CONFIGURE_DEPENDS ${CMAKE_CURRENT_SOURCE_DIR}/*.cpp)
   set(target chlorovdb_${name})
   if(sources)
@@ -13,6 +16,9 @@ function(chlorovdb_module name)
     target_compile_options(${target} PRIVATE -Wall -Wextra -Wno-unused-parameter)
     target_compile_definitions(${target} PUBLIC ${ARG_DEFINES})
     set_target_properties(${target} PROPERTIES POSITION_INDEPENDENT_CODE ON)
+    if(ARG_PCH)
+      target_precompile_headers(${target} PRIVATE ${ARG_PCH})
+    endif()
   else()
     add_library(${target} INTERFACE)
     target_include_directories(${target} INTERFACE ${PROJECT_SOURCE_DIR}/src)
@@ -33,6 +39,7 @@ function(chlorovdb_test name)
   add_executable(test_${name} ${sources})
   target_link_libraries(test_${name} PRIVATE ${ARG_LIBS} GTest::gtest GTest::gtest_main)
   target_include_directories(test_${name} PRIVATE ${PROJECT_SOURCE_DIR}/tests)  # scratch_dir.h, test_seed.h
+  target_precompile_headers(test_${name} REUSE_FROM chlorovdb_test_pch)
   target_compile_definitions(test_${name} PRIVATE
     CHLOROVDB_SOURCE_DIR="${PROJECT_SOURCE_DIR}")
   gtest_discover_tests(test_${name} DISCOVERY_TIMEOUT 60
