@@ -37,6 +37,29 @@ bool leg_reaches_face(const Scene& scene, Ray ray, float dist, const ChainFace& 
   return false;
 }
 
+// Appends the hit's face to the chain; false when the surface is opaque (not a
+// dielectric) or the chain is full.
+bool append_dielectric_face(const Scene& scene, const SurfaceHit& hit, SpecularChain* c) {
+  if (!std::holds_alternative<Dielectric>(scene.materials[scene.shapes[hit.shape_id].material]) ||
+      c->count == kMaxSpecularChain)
+    return false;
+  const ChainFace f{hit.shape_id, hit.prim_id, hit.ng, dot(hit.ng, hit.p), hit.p};
+  if (!scene.geometry.flat_face(hit.shape_id, hit.prim_id)) c->planar_parallel = false;
+  if (c->count > 0 && std::fabs(dot(f.ng, c->faces[0].ng)) < kParallelCos) c->planar_parallel = false;
+  c->faces[c->count++] = f;
+  return true;
+}
+
+// Same shapes, every vertex within `tolerance`: one path (the vertices carry the
+// float error of hits and refracted directions, ≈ 1e-6 of the path; distinct
+// solutions through the same shapes lie far apart).
+bool same_vertices(std::span<const ChainFace> a, std::span<const ChainFace> b, float tolerance) {
+  if (a.size() != b.size()) return false;
+  for (size_t j = 0; j < a.size(); ++j)
+    if (a[j].shape_id != b[j].shape_id || length(a[j].p - b[j].p) > tolerance) return false;
+  return true;
+}
+
 }  // namespace
 
 SurfaceHit solved_vertex_hit(const ChainFace& f, const Vec3& ns) {
@@ -120,27 +143,24 @@ std::optional<SpecularChain> straight_line_chain(const Scene& scene, const Vec3&
     const auto hit = scene.geometry.intersect(ray, t_max);
     if (!hit) return c;
     const ShapeBinding& b = scene.shapes[hit->shape_id];
-    if (!is_pass_through(scene, b)) {
-      if (!std::holds_alternative<Dielectric>(scene.materials[b.material]) || c.count == kMaxSpecularChain)
-        return std::nullopt;
-      const ChainFace f{hit->shape_id, hit->prim_id, hit->ng, dot(hit->ng, hit->p), hit->p};
-      if (!scene.geometry.flat_face(hit->shape_id, hit->prim_id)) c.planar_parallel = false;
-      if (c.count > 0 && std::fabs(dot(f.ng, c.faces[0].ng)) < kParallelCos) c.planar_parallel = false;
-      c.faces[c.count++] = f;
-    }
+    if (!is_pass_through(scene, b) && !append_dielectric_face(scene, *hit, &c)) return std::nullopt;
     ray = to_infinity ? scene.geometry.spawn_ray(*hit, ray.d) : scene.geometry.spawn_ray_to(*hit, y, &t_max);
   }
   return std::nullopt;
 }
 
-std::array<double, kMaxSpecularChain + 1> chain_indices(const Scene& scene, const SpecularChain& chain,
-                                                        const Vec3& toward, float lambda_nm) {
+bool chain_enters(const SpecularChain& chain, int j, const Vec3& x) {
+  const Vec3& from = j == 0 ? x : chain.faces[j - 1].p;
+  return dot(chain.faces[j].p - from, chain.faces[j].ng) < 0.f;
+}
+
+std::array<double, kMaxSpecularChain + 1> chain_indices(const Scene& scene, const SpecularChain& chain, const Vec3& x,
+                                                        float lambda_nm) {
   std::array<double, kMaxSpecularChain + 1> n{};
   n[0] = 1;
   for (int j = 0; j < chain.count; ++j) {
-    const ChainFace& f = chain.faces[j];
-    const float eta = ior_at(dielectric_of(scene, f.shape_id), lambda_nm);
-    n[j + 1] = n[j] * (dot(toward, f.ng) < 0.f ? eta : 1.f / eta);  // entering: n_inside / n_outside
+    const float eta = ior_at(dielectric_of(scene, chain.faces[j].shape_id), lambda_nm);
+    n[j + 1] = n[j] * (chain_enters(chain, j, x) ? eta : 1.f / eta);  // entering: n_inside / n_outside
   }
   return n;
 }
@@ -150,14 +170,8 @@ bool connection_owns(const Scene& scene, const Vec3& x, const Vec3& y, const Spe
   const auto c = straight_line_chain(scene, x, y, false);
   if (!c || c->count != walked.count) return false;
   const auto path = solve_refracted_path(scene, *c, x, y, false, lambda_nm);
-  if (!path) return false;
-  // The walked vertices carry the float error of hits and refracted directions
-  // (≈ 1e-6 of the path); distinct solutions through the same shapes lie far apart.
-  const float tolerance = kOwnedVertexTolerance * length(y - x);
-  for (int j = 0; j < c->count; ++j)
-    if (path->face[j].shape_id != walked.faces[j].shape_id || length(path->face[j].p - walked.faces[j].p) > tolerance)
-      return false;
-  return true;
+  return path && same_vertices({path->face.data(), size_t(path->count)}, {walked.faces.data(), size_t(walked.count)},
+                               kOwnedVertexTolerance * length(y - x));
 }
 
 std::optional<RefractedPath> solve_refracted_path(const Scene& scene, const SpecularChain& chain, const Vec3& x,
@@ -169,7 +183,7 @@ std::optional<RefractedPath> solve_refracted_path(const Scene& scene, const Spec
   if (dot(N, toward) < 0.f) N = -N;
   RefractedPath P;
   P.count = k;
-  P.n = chain_indices(scene, chain, toward, lambda_nm);
+  P.n = chain_indices(scene, chain, x, lambda_nm);
   std::array<double, kMaxSpecularChain + 1> h{};
   double z_prev = dot(N, x);
   for (int j = 0; j < k; ++j) {
@@ -211,31 +225,50 @@ std::optional<RefractedPath> solve_refracted_path(const Scene& scene, const Spec
   return P;
 }
 
-std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3& x, int medium, int light_index,
-                                                 Point2 u, PreparedMedia& media, Rng& rng) {
-  const Light& light = scene.lights[light_index];
-  if (std::holds_alternative<EnvironmentLight>(light)) return std::nullopt;
-  const SampledWavelengths& wl = media.lambda();
-  Vec3 y, n_light;
-  float pdf_area = 1.f;
-  const bool to_infinity = std::holds_alternative<DistantLight>(light);
-  if (const auto* area = std::get_if<AreaLight>(&light)) {
-    const ShapeSample ss = scene.geometry.sample_area(area->shape_id, u);
-    y = ss.p, n_light = ss.n, pdf_area = ss.pdf_area;
-  } else if (const auto* point = std::get_if<PointLight>(&light)) {
-    y = point->position;
-  } else if (const auto* spot = std::get_if<SpotLight>(&light)) {
-    y = spot->position;
-  } else {
-    y = -std::get<DistantLight>(light).direction;  // toward the light
+std::optional<SpecularChain> refracted_seed_chain(const Scene& scene, const Vec3& x, const Vec3& d, const Vec3& y,
+                                                  bool to_infinity, float lambda_nm) {
+  SpecularChain c;
+  Ray ray{x, d};
+  for (int crossings = 0; crossings < 256; ++crossings) {
+    const auto hit = scene.geometry.intersect(ray, kInfinity);
+    if (!to_infinity) {
+      // A light on a surface (stopped short of, as shadow rays are) passes too.
+      const float t_y = dot(y - ray.o, ray.d);
+      if (t_y > 0.f && (!hit || t_y * (1.f - kStopShort) < hit->t)) return c.count > 0 ? std::optional(c) : std::nullopt;
+    }
+    if (!hit) return to_infinity && c.count > 0 ? std::optional(c) : std::nullopt;
+    const ShapeBinding& b = scene.shapes[hit->shape_id];
+    if (is_pass_through(scene, b)) {
+      ray = scene.geometry.spawn_ray(*hit, ray.d);
+      continue;
+    }
+    if (!append_dielectric_face(scene, *hit, &c)) return std::nullopt;
+    Vec3 wt;
+    float eta_crossed;
+    if (!refract(-ray.d, hit->ns, ior_at(dielectric_of(scene, hit->shape_id), lambda_nm), &wt, &eta_crossed))
+      return std::nullopt;
+    ray = scene.geometry.spawn_ray(*hit, wt);
   }
-  const auto chain = straight_line_chain(scene, x, y, to_infinity);
-  if (!chain) return 0.f;
-  const auto path = solve_refracted_path(scene, *chain, x, y, to_infinity, wl[0]);
-  if (!path) return 0.f;
-  const int k = path->count;
+  return std::nullopt;
+}
 
-  // Each leg: reaches its face and nothing else, Fresnel at the face, medium transmittance.
+namespace {
+
+// Where the connection ends: a point on the light (y, its normal and the
+// sampling density by area) or, for a distant light, the direction toward it.
+struct LightEnd {
+  Vec3 y, n;
+  float pdf_area = 1.f;
+  bool to_infinity = false;
+};
+
+// Fluence rate at x from `light` along one solved path: each leg reaches its
+// face and nothing else, Fresnel transmission at every face, medium
+// transmittance on every leg, the generalised geometry term. Zero when blocked.
+float refracted_path_fluence(const Scene& scene, const Vec3& x, int medium, const Light& light, const LightEnd& end,
+                             const RefractedPath& path, PreparedMedia& media, Rng& rng) {
+  const SampledWavelengths& wl = media.lambda();
+  const int k = path.count;
   // Medium transmittance of one leg: the shared light connection, stopped by any glass.
   const auto leg_transmittance = [&](const ShadowOrigin& from, const LightTarget& to) {
     return connect_to_light(scene, from, to, media, rng, ConnectionOptions{}).T;
@@ -244,12 +277,12 @@ std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3&
   int leg_medium = medium;
   SurfaceHit prev;
   for (int j = 0; j < k; ++j) {
-    const ChainFace& f = path->face[j];
+    const ChainFace& f = path.face[j];
     const Vec3& v = f.p;
-    const Vec3& d = path->dir[j];
+    const Vec3& d = path.dir[j];
     const Ray ray = j == 0 ? Ray{x, d} : scene.geometry.spawn_ray(prev, d);
     if (!leg_reaches_face(scene, ray, length(v - ray.o), f)) return 0.f;
-    const SurfaceHit here = solved_vertex_hit(f, path->ns[j]);
+    const SurfaceHit here = solved_vertex_hit(f, path.ns[j]);
     const ShapeBinding& b = scene.shapes[f.shape_id];
     // The first leg is traced from the face back to x: spawn_ray_to stops short
     // of its target, and a medium point has no surface to stop short of. It
@@ -261,29 +294,130 @@ std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3&
     weight *= T[0];
     if (weight == 0.f) return 0.f;
     // At the shading normal, as the path tracer's dielectric refracts.
-    weight *= 1.f - fresnel_dielectric(dot(-d, path->ns[j]), ior_at(dielectric_of(scene, f.shape_id), wl[0]));
+    weight *= 1.f - fresnel_dielectric(dot(-d, path.ns[j]), ior_at(dielectric_of(scene, f.shape_id), wl[0]));
     if (weight == 0.f) return 0.f;
     leg_medium = medium_after_crossing(b, f.ng, d);
     prev = here;
   }
-  const Vec3& d_last = path->dir[k];
+  const Vec3& d_last = path.dir[k];
   const ShadowOrigin from = k == 0 ? ShadowOrigin{x, medium, nullptr} : ShadowOrigin{prev.p, leg_medium, &prev};
-  weight *= leg_transmittance(from, LightTarget{d_last, to_infinity ? prev.p + d_last * kInfinity : y, to_infinity})[0];
+  weight *= leg_transmittance(from, LightTarget{d_last, end.to_infinity ? prev.p + d_last * kInfinity : end.y,
+                                               end.to_infinity})[0];
   if (weight == 0.f) return 0.f;
 
-  if (to_infinity) {
+  if (end.to_infinity) {
     const auto& distant = std::get<DistantLight>(light);
-    return distant.L.sample(wl)[0] * distant.scale * weight * float(path->geometry);
+    return distant.L.sample(wl)[0] * distant.scale * weight * float(path.geometry);
   }
   // Radiance compressed into the denser medium: (n_x / n_light)², n_x = 1 here.
-  const float g = float(path->geometry / (path->n[k] * path->n[k]));
+  const float g = float(path.geometry / (path.n[k] * path.n[k]));
   if (const auto* area = std::get_if<AreaLight>(&light)) {
-    const float Le = Le_area(*area, n_light, -d_last, wl)[0];
-    return Le * weight * g * std::fabs(dot(n_light, d_last)) / pdf_area;
+    const float Le = Le_area(*area, end.n, -d_last, wl)[0];
+    return Le * weight * g * std::fabs(dot(end.n, d_last)) / end.pdf_area;
   }
   if (const auto* point = std::get_if<PointLight>(&light)) return point->I.sample(wl)[0] * point->scale * weight * g;
   const auto& spot = std::get<SpotLight>(light);
   return spot.I.sample(wl)[0] * spot.scale * spot_falloff(spot, -d_last) * weight * g;
+}
+
+// SMS seed direction, from a mixture: half the seeds uniform in the cone of
+// half-angle 30° around the straight line to the light (where the solutions a
+// straight line misses through curved glass mostly start: measured on the
+// teapot's spot lights, this half keeps the estimate's variance near the
+// straight-line solve's), half toward a point uniform by area on a dielectric
+// shape picked uniformly (solutions far off the line, a lens beside it).
+// nullopt when the scene has no dielectric.
+bool is_dielectric(const Scene& scene, const ShapeBinding& b) {
+  return b.material >= 0 && std::holds_alternative<Dielectric>(scene.materials[b.material]);
+}
+int dielectric_shape_count(const Scene& scene) {
+  int count = 0;
+  for (const ShapeBinding& b : scene.shapes) count += is_dielectric(scene, b);
+  return count;
+}
+
+std::optional<Vec3> sample_seed_direction(const Scene& scene, const Vec3& x, const Vec3& y, bool to_infinity, Rng& rng) {
+  constexpr float kConeCos = 0.8660254f;  // cos 30°
+  const int dielectrics = dielectric_shape_count(scene);
+  if (dielectrics == 0) return std::nullopt;
+  if (rng.uniform() < 0.5f) {
+    const Vec3 axis = normalize(to_infinity ? y : y - x);
+    return Frame::from_z(axis).to_world(sample_uniform_cone(Point2{rng.uniform(), rng.uniform()}, kConeCos));
+  }
+  int pick = std::min(int(rng.uniform() * dielectrics), dielectrics - 1);
+  const Point2 u{rng.uniform(), rng.uniform()};
+  for (int s = 0; s < int(scene.shapes.size()); ++s) {
+    if (!is_dielectric(scene, scene.shapes[s]) || pick-- > 0) continue;
+    const Vec3 d = scene.geometry.sample_area(s, u).p - x;
+    const float len = length(d);
+    return len > 0.f ? std::optional(d / len) : std::nullopt;
+  }
+  return std::nullopt;
+}
+
+bool same_path(const RefractedPath& a, const RefractedPath& b, float tolerance) {
+  return same_vertices({a.face.data(), size_t(a.count)}, {b.face.data(), size_t(b.count)}, tolerance);
+}
+
+}  // namespace
+
+std::optional<RefractedPath> solve_from_random_seed(const Scene& scene, const Vec3& x, const Vec3& y, bool to_infinity,
+                                                    float lambda_nm, Rng& rng) {
+  const auto d = sample_seed_direction(scene, x, y, to_infinity, rng);
+  if (!d) return std::nullopt;
+  const auto chain = refracted_seed_chain(scene, x, *d, y, to_infinity, lambda_nm);
+  if (!chain) return std::nullopt;
+  return solve_refracted_path(scene, *chain, x, y, to_infinity, lambda_nm);
+}
+
+std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3& x, int medium, int light_index,
+                                                 Point2 u, PreparedMedia& media, Rng& rng) {
+  const Light& light = scene.lights[light_index];
+  if (std::holds_alternative<EnvironmentLight>(light)) return std::nullopt;
+  const float lambda_nm = media.lambda()[0];
+  LightEnd end;
+  end.to_infinity = std::holds_alternative<DistantLight>(light);
+  if (const auto* area = std::get_if<AreaLight>(&light)) {
+    const ShapeSample ss = scene.geometry.sample_area(area->shape_id, u);
+    end.y = ss.p, end.n = ss.n, end.pdf_area = ss.pdf_area;
+  } else if (const auto* point = std::get_if<PointLight>(&light)) {
+    end.y = point->position;
+  } else if (const auto* spot = std::get_if<SpotLight>(&light)) {
+    end.y = spot->position;
+  } else {
+    end.y = -std::get<DistantLight>(light).direction;  // toward the light
+  }
+  std::optional<RefractedPath> seeded;
+  if (const auto chain = straight_line_chain(scene, x, end.y, end.to_infinity))
+    seeded = solve_refracted_path(scene, *chain, x, end.y, end.to_infinity, lambda_nm);
+  float fluence = seeded ? refracted_path_fluence(scene, x, medium, light, end, *seeded, media, rng) : 0.f;
+  // Area lights leave the other solutions to continuations (the partition above);
+  // without glass the straight line is the only path.
+  if (std::holds_alternative<AreaLight>(light) || dielectric_shape_count(scene) == 0) return fluence;
+
+  // Delta lights: the other solutions by SMS's unbiased estimate (Zeltner et
+  // al. 2020, §4.3). A random seed converges to a solution S with some
+  // probability p(S); the number of seeds drawn until one converges to S again
+  // is geometric with mean 1/p(S), so f(S) times that count estimates f(S)/p(S)
+  // and the sum over S is unbiased. The straight line's solution is counted
+  // above, so a seed that returns it adds nothing. The count is capped at
+  // kMaxSeedTrials, which lowers a solution of p < 1/kMaxSeedTrials by the factor
+  // 1 − (1 − p)^kMaxSeedTrials; the expected work is one seed plus one
+  // geometric run per other solution, whatever the p.
+  constexpr int kMaxSeedTrials = 1024;
+  const auto found = solve_from_random_seed(scene, x, end.y, end.to_infinity, lambda_nm, rng);
+  if (!found) return fluence;
+  const float tolerance =
+      kOwnedVertexTolerance * length((end.to_infinity ? found->face[found->count - 1].p : end.y) - x);
+  if (seeded && same_path(*found, *seeded, tolerance)) return fluence;
+  const float f = refracted_path_fluence(scene, x, medium, light, end, *found, media, rng);
+  if (f == 0.f) return fluence;
+  int trials = 1;
+  for (; trials < kMaxSeedTrials; ++trials) {
+    const auto again = solve_from_random_seed(scene, x, end.y, end.to_infinity, lambda_nm, rng);
+    if (again && same_path(*again, *found, tolerance)) break;
+  }
+  return fluence + f * float(trials);
 }
 
 }  // namespace chlorovdb

@@ -22,8 +22,11 @@
 // solver is deterministic in (x, y, λ'), so each refracted path x → y is counted
 // once: by the connection when the solve from its own endpoint finds it, by the
 // continuation otherwise (other solutions, non-convergence, straight lines that
-// cross other faces than the path, spheres, paths with a reflection). Delta lights have no second strategy: what the solver misses is
-// missing energy (measured in docs/fluorescence.md).
+// cross other faces than the path, spheres, paths with a reflection).
+// Delta lights have no second strategy: their other solutions come from SMS's
+// unbiased estimate (random seeds, each found solution weighted by the number of
+// further seeds it takes to find it again); paths with a reflection, more than
+// kMaxSpecularChain faces or a sphere are not found (docs/fluorescence.md).
 #include <array>
 #include <optional>
 #include <span>
@@ -99,10 +102,26 @@ std::optional<RefractedPath> solve_refracted_path(const Scene& scene, const Spec
 // with the closed form on planar chains).
 std::optional<RefractedPath> solve_manifold_path(const Scene& scene, const SpecularChain& chain, const Vec3& x,
                                                  const Vec3& y, bool to_infinity, float lambda_nm);
-// Relative index n_i of every layer (n_0 = 1 at x): entering a face (the
-// straight line against its outward normal) multiplies by its IOR.
-std::array<double, kMaxSpecularChain + 1> chain_indices(const Scene& scene, const SpecularChain& chain,
-                                                        const Vec3& toward, float lambda_nm);
+// Whether the chain enters face j's shape: the step from the previous vertex
+// (x for j = 0) to face j's point runs against its outward normal.
+bool chain_enters(const SpecularChain& chain, int j, const Vec3& x);
+// Relative index n_i of every layer (n_0 = 1 at x): entering a face multiplies by its IOR.
+std::array<double, kMaxSpecularChain + 1> chain_indices(const Scene& scene, const SpecularChain& chain, const Vec3& x,
+                                                        float lambda_nm);
+
+// SMS's random seed (Zeltner, Georgiev & Jakob 2020): the faces met by the ray
+// from x along d refracted forward through every dielectric face (transmission
+// at the shading normal, at `lambda_nm`), up to the leg that passes the light
+// point y (to_infinity: the leg that leaves the scene). nullopt when the ray
+// meets an opaque surface or total internal reflection first, never passes y,
+// crosses more than kMaxSpecularChain faces or none.
+std::optional<SpecularChain> refracted_seed_chain(const Scene& scene, const Vec3& x, const Vec3& d, const Vec3& y,
+                                                  bool to_infinity, float lambda_nm);
+// One random seed: a direction from x (half in the 30° cone around the straight
+// line to y, half toward a point uniform by area on a dielectric shape), its
+// refracted_seed_chain, and the path the solver converges to from there, if any.
+std::optional<RefractedPath> solve_from_random_seed(const Scene& scene, const Vec3& x, const Vec3& y, bool to_infinity,
+                                                    float lambda_nm, Rng& rng);
 
 // A path a continuation walked from x at λ (dielectric transmissions at
 // `walked`, then the area light at y): true when the connection produces it.
@@ -112,8 +131,9 @@ bool connection_owns(const Scene& scene, const Vec3& x, const Vec3& y, const Spe
 // through the dielectric chain seeded by the straight line to one light sample
 // (area lights: a point uniform by area from `u`):  L · Π(1 − R_i) · T_media ·
 // (n_x / n_light)² · dω/dA_⊥ · |cos θ_light| / pdf_A, or the delta lights'
-// equivalents (R_i at the shading normal, as the path tracer refracts). Zero
-// when the path is blocked or no path is found. Environment lights are not handled (returns nullopt: the caller falls back).
+// equivalents (R_i at the shading normal, as the path tracer refracts), plus for
+// delta lights the SMS estimate of every other solution. Zero when the path is
+// blocked or no path is found. Environment lights are not handled (returns nullopt: the caller falls back).
 std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3& x, int medium, int light_index,
                                                  Point2 u, PreparedMedia& media, Rng& rng);
 

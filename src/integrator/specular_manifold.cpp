@@ -264,22 +264,22 @@ std::optional<RefractedPath> solve_manifold_path(const Scene& scene, const Specu
                                                  const Vec3& y, bool to_infinity, float lambda_nm) {
   const int k = chain.count;
   if (k == 0) return std::nullopt;  // nothing to solve: the planar form's straight line
-  const Vec3 toward = to_infinity ? y : y - x;
   Manifold M;
   M.k = k;
   M.x0 = to_double(x);
   M.to_infinity = to_infinity;
   M.end = to_double(y);
   if (to_infinity) M.end = M.end * (1 / length(M.end));
-  M.eta = chain_indices(scene, chain, toward, lambda_nm);
-  // Seed: the straight line's crossings, placed on their planes in double.
-  const Vec3d seed_dir = to_double(normalize(toward));
+  M.eta = chain_indices(scene, chain, x, lambda_nm);
+  // Seed: the chain's own crossings, placed on their planes in double.
   std::array<bool, kMaxSpecularChain> entering{};
   for (int j = 0; j < k; ++j) {
     const ChainFace& f = chain.faces[j];
-    if (!set_patch(scene.geometry, f.shape_id, f.prim_id, &M.v[j]) || !place_along(&M.v[j], M.x0, seed_dir))
+    const Vec3d seed = to_double(f.p) - M.x0;
+    if (!set_patch(scene.geometry, f.shape_id, f.prim_id, &M.v[j]) ||
+        !place_along(&M.v[j], M.x0, seed * (1 / length(seed))))
       return std::nullopt;
-    entering[j] = dot(toward, f.ng) < 0.f;
+    entering[j] = chain_enters(chain, j, x);
   }
 
   std::array<double, kMaxUnknowns> c, c_trial, step;

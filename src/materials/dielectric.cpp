@@ -53,11 +53,8 @@ float fresnel_dielectric(float cos_i, float eta) {
   return 0.5f * (r_parl * r_parl + r_perp * r_perp);
 }
 
-// Snell refraction of w (pointing away, on the side of n when dot(n, w) > 0)
-// across a boundary with relative IOR eta; false under total internal reflection.
-static bool refract(Vec3 w, float eta, Vec3* wt, float* eta_crossed) {
-  float cos_i = w.z;
-  Vec3 n{0, 0, 1};
+bool refract(Vec3 w, Vec3 n, float eta, Vec3* wt, float* eta_crossed) {
+  float cos_i = dot(n, w);
   if (cos_i < 0.f) {
     eta = 1.f / eta;
     cos_i = -cos_i;
@@ -88,7 +85,7 @@ std::optional<BsdfSample> DielectricBxdf::sample(Vec3 wo, float uc, SampledWavel
   }
   Vec3 wi;
   float eta_crossed;
-  if (!refract(wo, eta[0], &wi, &eta_crossed)) return std::nullopt;  // T > 0 excludes TIR; guards rounding
+  if (!refract(wo, Vec3{0, 0, 1}, eta[0], &wi, &eta_crossed)) return std::nullopt;  // T > 0 excludes TIR; guards rounding
   SampledSpectrum f(0.f);
   const float ft = T / std::fabs(wi.z) / (eta_crossed * eta_crossed);
   if (dispersive) {

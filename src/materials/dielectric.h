@@ -38,6 +38,11 @@ inline bool is_dispersive(const Dielectric& d) { return std::holds_alternative<S
 // light arrives from the other side and eta is inverted. Returns 1 under total
 // internal reflection.
 float fresnel_dielectric(float cos_i, float eta);
+// Snell refraction of the unit direction w (pointing away from the surface, on
+// the side of the unit normal n when dot(n, w) > 0) across a boundary with
+// relative IOR eta (as for fresnel_dielectric). eta_crossed: n_t / n_i along the
+// way w came from. False under total internal reflection.
+bool refract(Vec3 w, Vec3 n, float eta, Vec3* wt, float* eta_crossed);
 
 // Local space: z is the normal pointing outside. Radiance transport (camera
 // paths): transmitted radiance is scaled by 1 / eta² (compressed solid angle).

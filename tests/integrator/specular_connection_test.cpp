@@ -439,17 +439,104 @@ TEST(SpecularManifold, SpotLightThroughSmoothFlaskMatchesASmallDisk) {
 }
 
 
+// Track length of the ray o + t d, t > 0, inside the sphere (c, r).
+double chord_in_sphere(const Vec3& o, const Vec3& d, const Vec3& c, double r) {
+  const Vec3 oc = o - c;
+  const double b = dot(oc, d), q = dot(oc, oc) - r * r;
+  const double disc = b * b - q;
+  if (disc <= 0) return 0;
+  const double t1 = -b - std::sqrt(disc), t2 = -b + std::sqrt(disc);
+  return std::max(0.0, t2 - std::max(t1, 0.0));
+}
+
+TEST(SpecularManifold, PointLightThroughAGlassBallMatchesPhotonsFromTheLight) {
+  // A smooth glass ball (mesh, r = 2 cm) and a point light 20 cm from it. The
+  // fluence rate its refracted paths bring to a point x behind the ball, against
+  // photons traced from the light through the ball (directions uniform over the
+  // cone that holds the ball, transmission forced with weight 1 − R at each
+  // face, as the connection counts) and scored by their track length in a
+  // sphere of radius 3 mm around x. Two points:
+  // - beside the ball's shadow: the straight line to the light misses the ball,
+  //   so every refracted path is one the straight-line seed cannot find (only
+  //   SMS's random seeds reach it; without them the connection returns the
+  //   direct term alone);
+  // - inside the shadow: the straight line crosses the ball; its solution and
+  //   the random seeds' must not be counted twice.
+  // Agreement within 4σ of both estimates combined, plus 1 % for the photon
+  // sphere's finite size (the fluence varies across its 3 mm).
+  const Scene scene = load_scene(write_scene("manifold_ball", dye_scene_head("direct") + R"(    {"type": "mesh", "file": ")" +
+                                                                   write_smooth_sphere("glass_ball", 0.02f) +
+                                                                   R"(", "material": "glass"}],
+  "lights": [{"type": "point", "position": [0.2, 0, 0], "spectrum": {"gaussian": [420, 8]}, "scale": 2}]})"));
+  const Vec3 y(0.2f, 0.f, 0.f);
+  const double I = 2 * std::get<PointLight>(scene.lights[0]).I(kLambda);
+  SampledWavelengths wl = SampledWavelengths::single(kLambda);
+  PreparedMedia media(scene, wl);
+
+  // Photons through the ball: uniform directions in the cone of half-angle θ
+  // around the ball's centre (pdf 1 / (2π (1 − cos θ))).
+  constexpr double kScoreRadius = 0.003;
+  const Vec3 to_ball = normalize(Vec3(0.f) - y);
+  const double cos_cone = std::sqrt(1 - 0.0201 * 0.0201 / 0.04);
+  const Frame cone = Frame::from_z(to_ball);
+  const std::array<Vec3, 2> points{Vec3(-0.2f, 0.05f, 0.01f), Vec3(-0.15f, 0.012f, -0.006f)};
+  std::array<Estimate, 2> photons;
+  Rng rng(test_seed(41), 0);
+  constexpr int kPhotons = 1000000;
+  for (int i = 0; i < kPhotons; ++i) {
+    const double cos_t = 1 - rng.uniform() * (1 - cos_cone), phi = 2 * M_PI * rng.uniform();
+    const double sin_t = std::sqrt(std::max(0.0, 1 - cos_t * cos_t));
+    Ray ray{y, normalize(cone.to_world(Vec3(float(sin_t * std::cos(phi)), float(sin_t * std::sin(phi)), float(cos_t))))};
+    double weight = I * 2 * M_PI * (1 - cos_cone);  // I / pdf
+    int crossed = 0;
+    for (; crossed < 2; ++crossed) {
+      const auto hit = scene.geometry.intersect(ray, kInfinity);
+      if (!hit) break;
+      const Bsdf bsdf = make_bsdf(scene.materials[scene.shapes[hit->shape_id].material], *hit, wl);
+      const auto bs = bsdf.sample(-ray.d, 1.f - 1e-7f, Point2{0.5f, 0.5f});
+      if (!bs || !bs->is_transmission) break;  // total internal reflection: not a transmission-only path
+      weight *= bs->f[0] * std::fabs(dot(bs->wi, hit->ns)) * bs->eta * bs->eta;  // 1 − R
+      ray = scene.geometry.spawn_ray(*hit, bs->wi);
+    }
+    for (size_t k = 0; k < points.size(); ++k)
+      photons[k].add(crossed == 2 ? weight * chord_in_sphere(ray.o, ray.d, points[k], kScoreRadius) /
+                                        (4.0 / 3 * M_PI * std::pow(kScoreRadius, 3))
+                                  : 0.0);
+  }
+
+  for (size_t k = 0; k < points.size(); ++k) {
+    const Vec3& x = points[k];
+    const auto straight = straight_line_chain(scene, x, y, false);
+    ASSERT_TRUE(straight);
+    EXPECT_EQ(straight->count, k == 0 ? 0 : 2) << "point " << k;
+    // The direct term (beside the shadow) is exact: take it out of the connection.
+    const double direct = k == 0 ? I / double(dot(y - x, y - x)) : 0.0;
+    Estimate connect;
+    for (int i = 0; i < 20000; ++i)
+      connect.add(*connect_through_dielectrics(scene, x, -1, 0, Point2{0.5f, 0.5f}, media, rng) - direct);
+    const double sigma = std::hypot(connect.sigma(), photons[k].sigma());
+    std::printf("point %zu: connection %.5g ± %.2g, photons %.5g ± %.2g (direct %.5g)\n", k, connect.mean(),
+                connect.sigma(), photons[k].mean(), photons[k].sigma(), direct);
+    EXPECT_GT(photons[k].mean(), 20 * photons[k].sigma()) << "point " << k << " must lie in the refracted beam";
+    EXPECT_NEAR(connect.mean(), photons[k].mean(), 4 * sigma + 0.01 * photons[k].mean()) << "point " << k;
+  }
+}
+
 // Energy share of transmission-only paths the solver does not find: from points
 // inside a vessel's liquid, uniform directions refracted forward through the
 // glass by the path tracer's own dielectric (transmission forced, weight
 // Π(1 − R)) to where they leave (an opaque surface, or 10 m out when they
 // escape); a path counts as found when the solve seeded by the straight line
-// to that end point returns it (connection_owns). For a delta light the share
-// not found is missing energy; for area lights continuations carry it.
-// Measured (docs/fluorescence.md): flask 1.3 %, beaker 12.7 %, teapot 13.2 %,
-// mostly straight lines that cross another number of faces than the path.
+// to that end point returns it (connection_owns). For area lights
+// continuations carry the share not found; for delta lights SMS's random seeds
+// do, so the share none of kSeeds random seeds reaches either bounds what a
+// delta light misses (a solution reached with probability p < 1/kSeeds may be
+// counted as unreached). Measured (docs/fluorescence.md): not found by the
+// straight line flask 1.3 %, beaker 12.7 %, teapot 13.2 %, mostly straight
+// lines that cross another number of faces than the path.
+constexpr int kSeeds = 256;
 struct MissedShare {
-  double missed = 0, total = 0;
+  double missed = 0, unreached = 0, total = 0;
   long paths = 0;
 };
 MissedShare transmission_paths_missed(const Scene& scene, int liquid_shape, float depth, int points, uint64_t seed) {
@@ -488,7 +575,19 @@ MissedShare transmission_paths_missed(const Scene& scene, int liquid_shape, floa
     if (!end || walked.count == 0) continue;
     ++share.paths;
     share.total += weight;
-    if (!connection_owns(scene, x, *end, walked, kLambda)) share.missed += weight;
+    if (connection_owns(scene, x, *end, walked, kLambda)) continue;
+    share.missed += weight;
+    // Left to SMS's random seeds: does any of kSeeds converge to it?
+    const float tolerance = 1e-4f * length(*end - x);
+    bool reached = false;
+    for (int s = 0; s < kSeeds && !reached; ++s) {
+      const auto path = solve_from_random_seed(scene, x, *end, false, kLambda, rng);
+      reached = path && path->count == walked.count;
+      for (int j = 0; reached && j < walked.count; ++j)
+        reached = path->face[j].shape_id == walked.faces[j].shape_id &&
+                  length(path->face[j].p - walked.faces[j].p) <= tolerance;
+    }
+    if (!reached) share.unreached += weight;
   }
   return share;
 }
@@ -498,24 +597,26 @@ TEST(SpecularManifold, FindsTheTransmissionPathsOfVesselGlass) {
     std::string name;
     Scene scene;
     float depth;   // x lies up to this far inside the liquid's surface, metres
-    double bound;  // the missed share must stay below this
+    double bound;            // the share not found from the straight line must stay below this
+    double unreached_bound;  // and the share no random seed reaches below this
   };
   const auto source = std::filesystem::path(CHLOROVDB_SOURCE_DIR) / "scenes";
   std::vector<Vessel> vessels;
-  vessels.push_back({"smooth flask", load_scene(write_scene("manifold_missed", flask_scene("]"))), 0.02f, 0.03});
-  vessels.push_back({"beaker", load_scene(source / "glass_UVB_5uM_Q0.23.json"), 0.01f, 0.2});
-  vessels.push_back({"teapot", load_scene(source / "teapot_50uM_D65_UVB_aim2.json"), 0.01f, 0.2});
+  vessels.push_back({"smooth flask", load_scene(write_scene("manifold_missed", flask_scene("]"))), 0.02f, 0.03, 0.005});
+  vessels.push_back({"beaker", load_scene(source / "glass_UVB_5uM_Q0.23.json"), 0.01f, 0.2, 0.04});
+  vessels.push_back({"teapot", load_scene(source / "teapot_50uM_D65_UVB_aim2.json"), 0.01f, 0.2, 0.03});
   for (const Vessel& v : vessels) {
     int liquid = -1;
     for (size_t s = 0; s < v.scene.shapes.size(); ++s)
       if (v.scene.shapes[s].medium_inside >= 0 && v.scene.shapes[s].material >= 0) liquid = int(s);
     ASSERT_GE(liquid, 0) << v.name;
     const MissedShare share = transmission_paths_missed(v.scene, liquid, v.depth, 20000, 29);
-    const double missed = share.missed / share.total;
-    std::printf("%s: %ld transmission-only paths, energy share not found by the solver %.4f\n", v.name.c_str(),
-                share.paths, missed);
+    const double missed = share.missed / share.total, unreached = share.unreached / share.total;
+    std::printf("%s: %ld transmission-only paths, energy share not found from the straight line %.4f, "
+                "nor by %d random seeds %.4f\n", v.name.c_str(), share.paths, missed, kSeeds, unreached);
     EXPECT_GT(share.paths, 2000) << v.name;
     EXPECT_LT(missed, v.bound) << v.name;
+    EXPECT_LT(unreached, v.unreached_bound) << v.name;
   }
 }
 
