@@ -401,9 +401,9 @@ std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3&
   // is geometric with mean 1/p(S), so f(S) times that count estimates f(S)/p(S)
   // and the sum over S is unbiased. The straight line's solution is counted
   // above, so a seed that returns it adds nothing. The count is capped at
-  // kMaxSeedTrials, which lowers a solution of p < 1/kMaxSeedTrials by the factor
-  // 1 − (1 − p)^kMaxSeedTrials; the expected work is one seed plus one
-  // geometric run per other solution, whatever the p.
+  // kMaxSeedTrials, which scales a solution's estimate by 1 − (1 − p)^kMaxSeedTrials
+  // (below 0.63 only where p < 1/kMaxSeedTrials); the expected work is one seed
+  // plus one geometric run per other solution, whatever the p.
   constexpr int kMaxSeedTrials = 1024;
   const auto found = solve_from_random_seed(scene, x, end.y, end.to_infinity, lambda_nm, rng);
   if (!found) return fluence;
