@@ -37,12 +37,19 @@ bool leg_reaches_face(const Scene& scene, Ray ray, float dist, const ChainFace& 
   return false;
 }
 
+bool is_dielectric(const Scene& scene, const ShapeBinding& b) {
+  return b.material >= 0 && std::holds_alternative<Dielectric>(scene.materials[b.material]);
+}
+int dielectric_shape_count(const Scene& scene) {
+  int count = 0;
+  for (const ShapeBinding& b : scene.shapes) count += is_dielectric(scene, b);
+  return count;
+}
+
 // Appends the hit's face to the chain; false when the surface is opaque (not a
 // dielectric) or the chain is full.
 bool append_dielectric_face(const Scene& scene, const SurfaceHit& hit, SpecularChain* c) {
-  if (!std::holds_alternative<Dielectric>(scene.materials[scene.shapes[hit.shape_id].material]) ||
-      c->count == kMaxSpecularChain)
-    return false;
+  if (!is_dielectric(scene, scene.shapes[hit.shape_id]) || c->count == kMaxSpecularChain) return false;
   const ChainFace f{hit.shape_id, hit.prim_id, hit.ng, dot(hit.ng, hit.p), hit.p};
   if (!scene.geometry.flat_face(hit.shape_id, hit.prim_id)) c->planar_parallel = false;
   if (c->count > 0 && std::fabs(dot(f.ng, c->faces[0].ng)) < kParallelCos) c->planar_parallel = false;
@@ -324,22 +331,12 @@ float refracted_path_fluence(const Scene& scene, const Vec3& x, int medium, cons
 // half-angle 30° around the straight line to the light (where the solutions a
 // straight line misses through curved glass mostly start: measured on the
 // teapot's spot lights, this half keeps the estimate's variance near the
-// straight-line solve's), half toward a point uniform by area on a dielectric
-// shape picked uniformly (solutions far off the line, a lens beside it).
-// nullopt when the scene has no dielectric.
-bool is_dielectric(const Scene& scene, const ShapeBinding& b) {
-  return b.material >= 0 && std::holds_alternative<Dielectric>(scene.materials[b.material]);
-}
-int dielectric_shape_count(const Scene& scene) {
-  int count = 0;
-  for (const ShapeBinding& b : scene.shapes) count += is_dielectric(scene, b);
-  return count;
-}
-
-std::optional<Vec3> sample_seed_direction(const Scene& scene, const Vec3& x, const Vec3& y, bool to_infinity, Rng& rng) {
+// straight-line solve's), half toward a point uniform by area on one of the
+// scene's `dielectrics` (> 0) dielectric shapes picked uniformly (solutions far
+// off the line, a lens beside it).
+std::optional<Vec3> sample_seed_direction(const Scene& scene, int dielectrics, const Vec3& x, const Vec3& y,
+                                          bool to_infinity, Rng& rng) {
   constexpr float kConeCos = 0.8660254f;  // cos 30°
-  const int dielectrics = dielectric_shape_count(scene);
-  if (dielectrics == 0) return std::nullopt;
   if (rng.uniform() < 0.5f) {
     const Vec3 axis = normalize(to_infinity ? y : y - x);
     return Frame::from_z(axis).to_world(sample_uniform_cone(Point2{rng.uniform(), rng.uniform()}, kConeCos));
@@ -355,6 +352,15 @@ std::optional<Vec3> sample_seed_direction(const Scene& scene, const Vec3& x, con
   return std::nullopt;
 }
 
+std::optional<RefractedPath> solve_from_seed(const Scene& scene, int dielectrics, const Vec3& x, const Vec3& y,
+                                             bool to_infinity, float lambda_nm, Rng& rng) {
+  const auto d = sample_seed_direction(scene, dielectrics, x, y, to_infinity, rng);
+  if (!d) return std::nullopt;
+  const auto chain = refracted_seed_chain(scene, x, *d, y, to_infinity, lambda_nm);
+  if (!chain) return std::nullopt;
+  return solve_refracted_path(scene, *chain, x, y, to_infinity, lambda_nm);
+}
+
 bool same_path(const RefractedPath& a, const RefractedPath& b, float tolerance) {
   return same_vertices({a.face.data(), size_t(a.count)}, {b.face.data(), size_t(b.count)}, tolerance);
 }
@@ -363,11 +369,9 @@ bool same_path(const RefractedPath& a, const RefractedPath& b, float tolerance) 
 
 std::optional<RefractedPath> solve_from_random_seed(const Scene& scene, const Vec3& x, const Vec3& y, bool to_infinity,
                                                     float lambda_nm, Rng& rng) {
-  const auto d = sample_seed_direction(scene, x, y, to_infinity, rng);
-  if (!d) return std::nullopt;
-  const auto chain = refracted_seed_chain(scene, x, *d, y, to_infinity, lambda_nm);
-  if (!chain) return std::nullopt;
-  return solve_refracted_path(scene, *chain, x, y, to_infinity, lambda_nm);
+  const int dielectrics = dielectric_shape_count(scene);
+  if (dielectrics == 0) return std::nullopt;
+  return solve_from_seed(scene, dielectrics, x, y, to_infinity, lambda_nm, rng);
 }
 
 std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3& x, int medium, int light_index,
@@ -393,7 +397,8 @@ std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3&
   float fluence = seeded ? refracted_path_fluence(scene, x, medium, light, end, *seeded, media, rng) : 0.f;
   // Area lights leave the other solutions to continuations (the partition above);
   // without glass the straight line is the only path.
-  if (std::holds_alternative<AreaLight>(light) || dielectric_shape_count(scene) == 0) return fluence;
+  const int dielectrics = dielectric_shape_count(scene);
+  if (std::holds_alternative<AreaLight>(light) || dielectrics == 0) return fluence;
 
   // Delta lights: the other solutions by SMS's unbiased estimate (Zeltner et
   // al. 2020, §4.3). A random seed converges to a solution S with some
@@ -405,7 +410,7 @@ std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3&
   // (below 0.63 only where p < 1/kMaxSeedTrials); the expected work is one seed
   // plus one geometric run per other solution, whatever the p.
   constexpr int kMaxSeedTrials = 1024;
-  const auto found = solve_from_random_seed(scene, x, end.y, end.to_infinity, lambda_nm, rng);
+  const auto found = solve_from_seed(scene, dielectrics, x, end.y, end.to_infinity, lambda_nm, rng);
   if (!found) return fluence;
   const float tolerance =
       kOwnedVertexTolerance * length((end.to_infinity ? found->face[found->count - 1].p : end.y) - x);
@@ -414,7 +419,7 @@ std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3&
   if (f == 0.f) return fluence;
   int trials = 1;
   for (; trials < kMaxSeedTrials; ++trials) {
-    const auto again = solve_from_random_seed(scene, x, end.y, end.to_infinity, lambda_nm, rng);
+    const auto again = solve_from_seed(scene, dielectrics, x, end.y, end.to_infinity, lambda_nm, rng);
     if (again && same_path(*again, *found, tolerance)) break;
   }
   return fluence + f * float(trials);
