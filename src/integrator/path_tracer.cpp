@@ -21,14 +21,23 @@ struct ScatterVertex {
 // Next-event estimation: one light, one point on it, the shadow ray through
 // media and interfaces. `scatter(wi)` returns {f·|cos|, pdf} of the vertex.
 // Returns the MIS-weighted contribution without the path throughput.
+// `through_glass`: delta lights connect through smooth dielectrics by solving
+// for the refracted paths (specular_connection.h); no other strategy reaches
+// them there. Area lights through glass come from BSDF-sampled paths.
 template <typename ScatterFn>
 SampledSpectrum sample_direct_light(const Scene& scene, const ScatterVertex& v, const SampledSpectrum& r_p,
-                                    PreparedMedia& media, Rng& rng, ScatterFn&& scatter) {
+                                    PreparedMedia& media, Rng& rng, bool through_glass, ScatterFn&& scatter) {
   if (scene.light_sampler.empty()) return {};
   const auto pick = scene.light_sampler.sample(rng.uniform());
   if (!pick || pick->pmf == 0.f) return {};
   const Light& light = scene.lights[pick->index];
   const SampledWavelengths& lambda = media.lambda();
+  if (through_glass && is_delta(light)) {
+    SampledSpectrum sum;
+    if (const auto arriving = light_through_dielectrics(scene, v.origin, pick->index, Point2{}, media, rng))
+      for (int i = 0; i < arriving->count; ++i) sum += scatter(arriving->paths[i].wi).first * arriving->paths[i].L;
+    return sum / (pick->pmf * r_p.average(lambda.count()));
+  }
   const auto ls = sample_Li(light, LightSampleContext{v.origin.p, v.n}, Point2{rng.uniform(), rng.uniform()}, lambda,
                             scene.geometry);
   if (!ls || ls->L.is_black() || !(ls->pdf > 0.f)) return {};
@@ -72,6 +81,8 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
   const Vec3 origin = ray.o;
   SpecularChain walked;
   bool walked_only_glass = options.skip_emitters_the_connection_owns;
+  const bool direct_through_glass =
+      scene.settings.direct_light_through_glass == DirectLightThroughGlass::connect && dielectric_shape_count(scene) > 0;
   ++stats.paths;
 
   // Light leaving an emitter toward the path, MIS-weighted against light sampling.
@@ -149,7 +160,7 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
                 }
                 const Vec3 wo = -ray.d;
                 const ScatterVertex v{{p, medium, nullptr}, Vec3{}};
-                L.other += beta * sample_direct_light(scene, v, r_u, media, rng, [&](const Vec3& wi) {
+                L.other += beta * sample_direct_light(scene, v, r_u, media, rng, direct_through_glass, [&](const Vec3& wi) {
                              return std::pair{phase_eval(mp.phase, wo, wi), phase_pdf(mp.phase, wo, wi)};
                            });
                 const MediumPhaseSample ps = phase_sample(mp.phase, wo, Point2{rng.uniform(), rng.uniform()});
@@ -230,7 +241,7 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
     const int medium_here = dot(wo, hit->ng) > 0.f ? binding.medium_outside : binding.medium_inside;
     const ScatterVertex v{{hit->p, medium_here, &prev_hit}, hit->ns};
     if (!bsdf.is_specular()) {
-      L.other += beta * sample_direct_light(scene, v, r_u, media, rng, [&](const Vec3& wi) {
+      L.other += beta * sample_direct_light(scene, v, r_u, media, rng, direct_through_glass, [&](const Vec3& wi) {
                    return std::pair{bsdf.f(wo, wi) * std::fabs(dot(wi, hit->ns)), bsdf.pdf(wo, wi)};
                  });
     }

@@ -40,12 +40,6 @@ bool leg_reaches_face(const Scene& scene, Ray ray, float dist, const ChainFace& 
 bool is_dielectric(const Scene& scene, const ShapeBinding& b) {
   return b.material >= 0 && std::holds_alternative<Dielectric>(scene.materials[b.material]);
 }
-int dielectric_shape_count(const Scene& scene) {
-  int count = 0;
-  for (const ShapeBinding& b : scene.shapes) count += is_dielectric(scene, b);
-  return count;
-}
-
 // Appends the hit's face to the chain; false when the surface is opaque (not a
 // dielectric) or the chain is full.
 bool append_dielectric_face(const Scene& scene, const SurfaceHit& hit, SpecularChain* c) {
@@ -269,18 +263,27 @@ struct LightEnd {
   bool to_infinity = false;
 };
 
-// Fluence rate at x from `light` along one solved path: each leg reaches its
-// face and nothing else, Fresnel transmission at every face, medium
-// transmittance on every leg, the generalised geometry term. Zero when blocked.
-float refracted_path_fluence(const Scene& scene, const Vec3& x, int medium, const Light& light, const LightEnd& end,
-                             const RefractedPath& path, PreparedMedia& media, Rng& rng) {
+// Light arriving at x from `light` along one solved path, per lane of
+// media.lambda(): radiance times solid angle (the fluence rate it brings), with
+// each leg reaching its face and nothing else, Fresnel transmission at every
+// face, medium transmittance on every leg and the generalised geometry term.
+// The path and its Fresnel factors are the hero wavelength's; the caller keeps
+// only the hero lane when the glass disperses. Zero when blocked.
+SampledSpectrum refracted_path_light(const Scene& scene, const Vec3& x, int medium, const Light& light,
+                                     const LightEnd& end, const RefractedPath& path, PreparedMedia& media, Rng& rng) {
   const SampledWavelengths& wl = media.lambda();
   const int k = path.count;
   // Medium transmittance of one leg: the shared light connection, stopped by any glass.
   const auto leg_transmittance = [&](const ShadowOrigin& from, const LightTarget& to) {
     return connect_to_light(scene, from, to, media, rng, ConnectionOptions{}).T;
   };
-  float weight = 1.f;
+  // Only the lanes the path carries decide whether it is blocked.
+  const auto dark = [&](const SampledSpectrum& w) {
+    for (int i = 0; i < wl.count(); ++i)
+      if (w[i] != 0.f) return false;
+    return true;
+  };
+  SampledSpectrum weight(1.f);
   int leg_medium = medium;
   SurfaceHit prev;
   for (int j = 0; j < k; ++j) {
@@ -288,43 +291,38 @@ float refracted_path_fluence(const Scene& scene, const Vec3& x, int medium, cons
     const Vec3& v = f.p;
     const Vec3& d = path.dir[j];
     const Ray ray = j == 0 ? Ray{x, d} : scene.geometry.spawn_ray(prev, d);
-    if (!leg_reaches_face(scene, ray, length(v - ray.o), f)) return 0.f;
+    if (!leg_reaches_face(scene, ray, length(v - ray.o), f)) return {};
     const SurfaceHit here = solved_vertex_hit(f, path.ns[j]);
     const ShapeBinding& b = scene.shapes[f.shape_id];
     // The first leg is traced from the face back to x: spawn_ray_to stops short
     // of its target, and a medium point has no surface to stop short of. It
     // starts in the medium on x's side of the face, which differs from x's own
     // when an interface (a medium boundary) lies between them.
-    const SampledSpectrum T =
-        j == 0 ? leg_transmittance(ShadowOrigin{v, medium_after_crossing(b, f.ng, -d), &here}, LightTarget{-d, x})
-               : leg_transmittance(ShadowOrigin{prev.p, leg_medium, &prev}, LightTarget{d, v});
-    weight *= T[0];
-    if (weight == 0.f) return 0.f;
+    weight *= j == 0 ? leg_transmittance(ShadowOrigin{v, medium_after_crossing(b, f.ng, -d), &here}, LightTarget{-d, x})
+                     : leg_transmittance(ShadowOrigin{prev.p, leg_medium, &prev}, LightTarget{d, v});
     // At the shading normal, as the path tracer's dielectric refracts.
     weight *= 1.f - fresnel_dielectric(dot(-d, path.ns[j]), ior_at(dielectric_of(scene, f.shape_id), wl[0]));
-    if (weight == 0.f) return 0.f;
+    if (dark(weight)) return {};
     leg_medium = medium_after_crossing(b, f.ng, d);
     prev = here;
   }
   const Vec3& d_last = path.dir[k];
   const ShadowOrigin from = k == 0 ? ShadowOrigin{x, medium, nullptr} : ShadowOrigin{prev.p, leg_medium, &prev};
   weight *= leg_transmittance(from, LightTarget{d_last, end.to_infinity ? prev.p + d_last * kInfinity : end.y,
-                                               end.to_infinity})[0];
-  if (weight == 0.f) return 0.f;
+                                                end.to_infinity});
+  if (dark(weight)) return {};
 
   if (end.to_infinity) {
     const auto& distant = std::get<DistantLight>(light);
-    return distant.L.sample(wl)[0] * distant.scale * weight * float(path.geometry);
+    return distant.L.sample(wl) * (distant.scale * float(path.geometry)) * weight;
   }
   // Radiance compressed into the denser medium: (n_x / n_light)², n_x = 1 here.
   const float g = float(path.geometry / (path.n[k] * path.n[k]));
-  if (const auto* area = std::get_if<AreaLight>(&light)) {
-    const float Le = Le_area(*area, end.n, -d_last, wl)[0];
-    return Le * weight * g * std::fabs(dot(end.n, d_last)) / end.pdf_area;
-  }
-  if (const auto* point = std::get_if<PointLight>(&light)) return point->I.sample(wl)[0] * point->scale * weight * g;
+  if (const auto* area = std::get_if<AreaLight>(&light))
+    return Le_area(*area, end.n, -d_last, wl) * (g * std::fabs(dot(end.n, d_last)) / end.pdf_area) * weight;
+  if (const auto* point = std::get_if<PointLight>(&light)) return point->I.sample(wl) * (point->scale * g) * weight;
   const auto& spot = std::get<SpotLight>(light);
-  return spot.I.sample(wl)[0] * spot.scale * spot_falloff(spot, -d_last) * weight * g;
+  return spot.I.sample(wl) * (spot.scale * spot_falloff(spot, -d_last) * g) * weight;
 }
 
 // SMS seed direction, from a mixture: half the seeds uniform in the cone of
@@ -374,11 +372,18 @@ std::optional<RefractedPath> solve_from_random_seed(const Scene& scene, const Ve
   return solve_from_seed(scene, dielectrics, x, y, to_infinity, lambda_nm, rng);
 }
 
-std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3& x, int medium, int light_index,
-                                                 Point2 u, PreparedMedia& media, Rng& rng) {
+int dielectric_shape_count(const Scene& scene) {
+  int count = 0;
+  for (const ShapeBinding& b : scene.shapes) count += is_dielectric(scene, b);
+  return count;
+}
+
+std::optional<ArrivingLight> light_through_dielectrics(const Scene& scene, const ShadowOrigin& from, int light_index,
+                                                       Point2 u, PreparedMedia& media, Rng& rng) {
   const Light& light = scene.lights[light_index];
   if (std::holds_alternative<EnvironmentLight>(light)) return std::nullopt;
-  const float lambda_nm = media.lambda()[0];
+  const SampledWavelengths& wl = media.lambda();
+  const float lambda_nm = wl[0];
   LightEnd end;
   end.to_infinity = std::holds_alternative<DistantLight>(light);
   if (const auto* area = std::get_if<AreaLight>(&light)) {
@@ -391,38 +396,74 @@ std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3&
   } else {
     end.y = -std::get<DistantLight>(light).direction;  // toward the light
   }
+  // Every path starts at x: a medium point, or a surface point offset off its
+  // surface toward the light (the solves and legs cast plain rays from x).
+  const Vec3 x = from.hit ? scene.geometry.spawn_ray(*from.hit, end.to_infinity ? end.y : end.y - from.p).o : from.p;
+  const int medium = from.medium;
+
+  ArrivingLight arriving;
+  bool dispersed = false;  // a path crossed dispersive glass: only its hero wavelength is right
+  const auto add = [&](const RefractedPath& path, const SampledSpectrum& L, float count) {
+    ArrivingLight::Path& p = arriving.paths[arriving.count++];
+    p.wi = path.dir[0];
+    p.L = L * count;
+    for (int j = 0; j < path.count; ++j) dispersed |= is_dispersive(dielectric_of(scene, path.face[j].shape_id));
+  };
   std::optional<RefractedPath> seeded;
   if (const auto chain = straight_line_chain(scene, x, end.y, end.to_infinity))
     seeded = solve_refracted_path(scene, *chain, x, end.y, end.to_infinity, lambda_nm);
-  float fluence = seeded ? refracted_path_fluence(scene, x, medium, light, end, *seeded, media, rng) : 0.f;
+  if (seeded) add(*seeded, refracted_path_light(scene, x, medium, light, end, *seeded, media, rng), 1.f);
+
   // Area lights leave the other solutions to continuations (the partition above);
   // without glass the straight line is the only path.
   const int dielectrics = dielectric_shape_count(scene);
-  if (std::holds_alternative<AreaLight>(light) || dielectrics == 0) return fluence;
-
-  // Delta lights: the other solutions by SMS's unbiased estimate (Zeltner et
-  // al. 2020, §4.3). A random seed converges to a solution S with some
-  // probability p(S); the number of seeds drawn until one converges to S again
-  // is geometric with mean 1/p(S), so f(S) times that count estimates f(S)/p(S)
-  // and the sum over S is unbiased. The straight line's solution is counted
-  // above, so a seed that returns it adds nothing. The count is capped at
-  // kMaxSeedTrials, which scales a solution's estimate by 1 − (1 − p)^kMaxSeedTrials
-  // (below 0.63 only where p < 1/kMaxSeedTrials); the expected work is one seed
-  // plus one geometric run per other solution, whatever the p.
-  constexpr int kMaxSeedTrials = 1024;
-  const auto found = solve_from_seed(scene, dielectrics, x, end.y, end.to_infinity, lambda_nm, rng);
-  if (!found) return fluence;
-  const float tolerance =
-      kOwnedVertexTolerance * length((end.to_infinity ? found->face[found->count - 1].p : end.y) - x);
-  if (seeded && same_path(*found, *seeded, tolerance)) return fluence;
-  const float f = refracted_path_fluence(scene, x, medium, light, end, *found, media, rng);
-  if (f == 0.f) return fluence;
-  int trials = 1;
-  for (; trials < kMaxSeedTrials; ++trials) {
-    const auto again = solve_from_seed(scene, dielectrics, x, end.y, end.to_infinity, lambda_nm, rng);
-    if (again && same_path(*again, *found, tolerance)) break;
+  if (!std::holds_alternative<AreaLight>(light) && dielectrics > 0) {
+    // Delta lights: the other solutions by SMS's unbiased estimate (Zeltner et
+    // al. 2020, §4.3). A random seed converges to a solution S with some
+    // probability p(S); the number of seeds drawn until one converges to S again
+    // is geometric with mean 1/p(S), so f(S) times that count estimates f(S)/p(S)
+    // and the sum over S is unbiased. The straight line's solution is counted
+    // above, so a seed that returns it adds nothing. The count is capped at
+    // kMaxSeedTrials, which scales a solution's estimate by 1 − (1 − p)^kMaxSeedTrials
+    // (below 0.63 only where p < 1/kMaxSeedTrials); the expected work is one seed
+    // plus one geometric run per other solution, whatever the p.
+    constexpr int kMaxSeedTrials = 1024;
+    const auto found = solve_from_seed(scene, dielectrics, x, end.y, end.to_infinity, lambda_nm, rng);
+    const float tolerance =
+        found ? kOwnedVertexTolerance * length((end.to_infinity ? found->face[found->count - 1].p : end.y) - x) : 0.f;
+    if (found && !(seeded && same_path(*found, *seeded, tolerance))) {
+      const SampledSpectrum L = refracted_path_light(scene, x, medium, light, end, *found, media, rng);
+      if (!L.is_black()) {
+        int trials = 1;
+        for (; trials < kMaxSeedTrials; ++trials) {
+          const auto again = solve_from_seed(scene, dielectrics, x, end.y, end.to_infinity, lambda_nm, rng);
+          if (again && same_path(*again, *found, tolerance)) break;
+        }
+        add(*found, L, float(trials));
+      }
+    }
   }
-  return fluence + f * float(trials);
+  // Dispersive glass bends each wavelength its own way: the paths above are the
+  // hero's, so the other lanes are dropped and the hero stands for all of them
+  // (as SampledWavelengths::terminate_secondary, for this estimate only).
+  if (dispersed && wl.count() > 1) {
+    const float hero_share = wl.secondary_terminated() ? 1.f : float(wl.count());
+    for (int i = 0; i < arriving.count; ++i) {
+      SampledSpectrum hero;
+      hero[0] = arriving.paths[i].L[0] * hero_share;
+      arriving.paths[i].L = hero;
+    }
+  }
+  return arriving;
+}
+
+std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3& x, int medium, int light_index,
+                                                 Point2 u, PreparedMedia& media, Rng& rng) {
+  const auto arriving = light_through_dielectrics(scene, ShadowOrigin{x, medium, nullptr}, light_index, u, media, rng);
+  if (!arriving) return std::nullopt;
+  float fluence = 0.f;
+  for (int i = 0; i < arriving->count; ++i) fluence += arriving->paths[i].L[0];
+  return fluence;
 }
 
 }  // namespace chlorovdb

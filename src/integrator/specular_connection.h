@@ -1,8 +1,10 @@
 #pragma once
-// Excitation connections through smooth dielectric surfaces: from a point in a
-// medium to a point, spot, distant or area light through a chain of up to
-// kMaxSpecularChain dielectric faces, by solving for the refracted path at the
-// excitation wavelength (Sellmeier glass bends each λ' by its own index).
+// Connections through smooth dielectric surfaces: from a point in a medium
+// (excitation rays) or a scattering point on a surface or in a medium (camera
+// paths' next-event estimation toward delta lights: the caustic on a floor) to a
+// point, spot, distant or area light through a chain of up to kMaxSpecularChain
+// dielectric faces, by solving for the refracted path at the hero wavelength
+// (Sellmeier glass bends each λ by its own index).
 //
 // The chain is seeded by the straight line from the point x to the light point
 // y: the dielectric faces it crosses, in order. Two solvers, one per geometry:
@@ -127,13 +129,34 @@ std::optional<RefractedPath> solve_from_random_seed(const Scene& scene, const Ve
 // `walked`, then the area light at y): true when the connection produces it.
 bool connection_owns(const Scene& scene, const Vec3& x, const Vec3& y, const SpecularChain& walked, float lambda_nm);
 
-// Fluence-rate estimate at x (one wavelength: wl.count() == 1) from one light
-// through the dielectric chain seeded by the straight line to one light sample
-// (area lights: a point uniform by area from `u`):  L · Π(1 − R_i) · T_media ·
-// (n_x / n_light)² · dω/dA_⊥ · |cos θ_light| / pdf_A, or the delta lights'
-// equivalents (R_i at the shading normal, as the path tracer refracts), plus for
-// delta lights the SMS estimate of every other solution. Zero when the path is
-// blocked or no path is found. Environment lights are not handled (returns nullopt: the caller falls back).
+// Shapes with a smooth dielectric material: zero means no connection needs solving.
+int dielectric_shape_count(const Scene& scene);
+
+// Light from one light reaching a point through the dielectric chain seeded by
+// the straight line to one light sample (area lights: a point uniform by area
+// from `u`), plus for delta lights the SMS estimate of one other solution: each
+// path's direction at the point (first leg, toward the light) and what it
+// brings, per lane of media.lambda(): radiance times solid angle,
+//   L · Π(1 − R_i) · T_media · (n_x / n_light)² · dω/dA_⊥ · |cos θ_light| / pdf_A,
+// or the delta lights' equivalents (R_i at the shading normal, as the path
+// tracer refracts). A scattering point weights each path by its phase function
+// or BSDF at wi; summed as they are, they are the fluence rate. The point is a
+// medium point or a surface point (`from.hit`, offset off its surface toward
+// the light). Paths through dispersive glass carry the hero wavelength only,
+// standing for all lanes. No path when blocked or none is found; nullopt for
+// environment lights (the caller falls back).
+struct ArrivingLight {
+  struct Path {
+    Vec3 wi;
+    SampledSpectrum L;
+  };
+  std::array<Path, 2> paths;
+  int count = 0;
+};
+std::optional<ArrivingLight> light_through_dielectrics(const Scene& scene, const ShadowOrigin& from, int light_index,
+                                                       Point2 u, PreparedMedia& media, Rng& rng);
+// The fluence rate at a medium point x (one wavelength: wl.count() == 1) that
+// light_through_dielectrics finds: the excitation ray's connection.
 std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3& x, int medium, int light_index,
                                                  Point2 u, PreparedMedia& media, Rng& rng);
 

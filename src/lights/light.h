@@ -16,6 +16,13 @@ namespace chlorovdb {
 
 using Light = std::variant<PointLight, SpotLight, DistantLight, AreaLight, EnvironmentLight>;
 
+// Point, spot and distant lights: a single direction from any point, so no
+// sampled direction (BSDF, phase function, continuation) ever reaches them.
+inline bool is_delta(const Light& light) {
+  return std::holds_alternative<PointLight>(light) || std::holds_alternative<SpotLight>(light) ||
+         std::holds_alternative<DistantLight>(light);
+}
+
 // Once after the scene is built: normalises directions, and gives lights at
 // infinity the scene's bounding sphere (for shadow-ray end points and power).
 void preprocess(Light& light, const Bounds3& scene_bounds);

@@ -42,6 +42,13 @@ enum class QuantumYieldMode { weight, roulette };
 //  block   — stop (exact with `full`: light through glass then arrives only by
 //            continuation paths, which cannot reach delta lights).
 enum class ExcitationThroughGlass { connect, fresnel, block };
+// Camera paths' next-event estimation toward point, spot and distant lights
+// behind smooth glass (the caustic on a floor, the light a scattering liquid in
+// a vessel receives):
+//  connect — solve for the refracted paths, as excitation rays do;
+//  block   — stop at glass (those lights then add nothing behind glass).
+// Area lights behind glass are reached by BSDF-sampled paths either way.
+enum class DirectLightThroughGlass { connect, block };
 // The first direction of an excitation continuation (full mode): uniform over
 // the sphere, or from the medium's guide learned before the render, mixed with
 // uniform (guided; measured no better on the default scene, kept to measure:
@@ -68,6 +75,7 @@ struct RenderSettings {
   // paths carrying no emission wavelength). Off only to measure each skip.
   bool skip_unneeded_work = true;
   ExcitationThroughGlass excitation_through_glass = ExcitationThroughGlass::connect;
+  DirectLightThroughGlass direct_light_through_glass = DirectLightThroughGlass::connect;
   ContinuationDirections continuation_directions = ContinuationDirections::uniform;
   // Both kept to measure what the defaults buy (docs/fluorescence.md); neither
   // applies to the `reference` estimator, which always draws λ' uniformly below
