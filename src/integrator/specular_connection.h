@@ -143,8 +143,10 @@ int dielectric_shape_count(const Scene& scene);
 // or BSDF at wi; summed as they are, they are the fluence rate. The point is a
 // medium point or a surface point (`from.hit`, offset off its surface toward
 // the light). Paths through dispersive glass carry the hero wavelength only,
-// standing for all lanes. No path when blocked or none is found; nullopt for
-// environment lights (the caller falls back).
+// standing for all lanes. The random seed runs with `seed_probability`, its
+// estimate divided by it (camera paths run it at one connection in four). No
+// path when blocked or none is found; nullopt for environment lights (the
+// caller falls back).
 struct ArrivingLight {
   struct Path {
     Vec3 wi;
@@ -154,7 +156,8 @@ struct ArrivingLight {
   int count = 0;
 };
 std::optional<ArrivingLight> light_through_dielectrics(const Scene& scene, const ShadowOrigin& from, int light_index,
-                                                       Point2 u, PreparedMedia& media, Rng& rng);
+                                                       Point2 u, PreparedMedia& media, Rng& rng,
+                                                       float seed_probability = 1.f);
 // The fluence rate at a medium point x (one wavelength: wl.count() == 1) that
 // light_through_dielectrics finds: the excitation ray's connection.
 std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3& x, int medium, int light_index,
