@@ -416,6 +416,7 @@ std::optional<ArrivingLight> light_through_dielectrics(const Scene& scene, const
   ArrivingLight arriving;
   bool dispersed = false;  // a path crossed dispersive glass: only its hero wavelength is right
   const auto add = [&](const RefractedPath& path, const SampledSpectrum& L, float count) {
+    if (L.is_black()) return;
     ArrivingLight::Path& p = arriving.paths[arriving.count++];
     p.wi = path.dir[0];
     p.L = L * count;
