@@ -467,13 +467,19 @@ std::optional<Ray> transmit_through_glass(const Scene& scene, Ray ray, SampledWa
   return ray;
 }
 
-// A uniform direction in the cone of half-angle acos(cos_cone) around `axis`,
-// and 1 / its pdf (2π (1 − cos_cone)).
-Vec3 sample_cone(const Frame& axis, double cos_cone, Rng& rng, double* inv_pdf) {
+// A photon from a point light at y (intensity I) through a glass ball of radius
+// r at the origin: a direction uniform over the cone that just holds the ball
+// (pdf 1 / (2π (1 − cos θ))), then transmit_through_glass through its two
+// faces. *weight = I / pdf · Π(1 − R); nullopt when it misses or reflects.
+std::optional<Ray> photon_through_ball(const Scene& scene, const Vec3& y, double I, double r,
+                                       const SampledWavelengths& wl, Rng& rng, double* weight) {
+  const double cos_cone = std::sqrt(1 - 1.005 * r * 1.005 * r / double(dot(y, y)));
   const double cos_t = 1 - rng.uniform() * (1 - cos_cone), phi = 2 * M_PI * rng.uniform();
   const double sin_t = std::sqrt(std::max(0.0, 1 - cos_t * cos_t));
-  *inv_pdf = 2 * M_PI * (1 - cos_cone);
-  return normalize(axis.to_world(Vec3(float(sin_t * std::cos(phi)), float(sin_t * std::sin(phi)), float(cos_t))));
+  const Vec3 d = normalize(Frame::from_z(normalize(-y)).to_world(
+      Vec3(float(sin_t * std::cos(phi)), float(sin_t * std::sin(phi)), float(cos_t))));
+  *weight = I * 2 * M_PI * (1 - cos_cone);
+  return transmit_through_glass(scene, Ray{y, d}, wl, 2, weight);
 }
 
 TEST(SpecularManifold, PointLightThroughAGlassBallMatchesPhotonsFromTheLight) {
@@ -500,21 +506,14 @@ TEST(SpecularManifold, PointLightThroughAGlassBallMatchesPhotonsFromTheLight) {
   SampledWavelengths wl = SampledWavelengths::single(kLambda);
   PreparedMedia media(scene, wl);
 
-  // Photons through the ball: uniform directions in the cone of half-angle θ
-  // around the ball's centre (pdf 1 / (2π (1 − cos θ))).
   constexpr double kScoreRadius = 0.003;
-  const Vec3 to_ball = normalize(Vec3(0.f) - y);
-  const double cos_cone = std::sqrt(1 - 0.0201 * 0.0201 / 0.04);
-  const Frame cone = Frame::from_z(to_ball);
   const std::array<Vec3, 2> points{Vec3(-0.2f, 0.05f, 0.01f), Vec3(-0.15f, 0.012f, -0.006f)};
   std::array<Estimate, 2> photons;
   Rng rng(test_seed(41), 0);
   constexpr int kPhotons = 1000000;
   for (int i = 0; i < kPhotons; ++i) {
     double weight;
-    const Vec3 d = sample_cone(cone, cos_cone, rng, &weight);
-    weight *= I;
-    const auto out = transmit_through_glass(scene, Ray{y, d}, wl, 2, &weight);
+    const auto out = photon_through_ball(scene, y, I, 0.02, wl, rng, &weight);
     for (size_t k = 0; k < points.size(); ++k)
       photons[k].add(out ? weight * chord_in_sphere(out->o, out->d, points[k], kScoreRadius) /
                                (4.0 / 3 * M_PI * std::pow(kScoreRadius, 3))
@@ -570,18 +569,12 @@ TEST(SpecularManifold, FloorBehindAGlassBallMatchesPhotonsFromTheLight) {
   constexpr double kDiskRadius = 0.0015;
   const std::array<Vec3, 3> points{Vec3(-0.008f, -0.003f, kFloor), Vec3(-0.004f, -0.004f, kFloor),
                                    Vec3(-0.035f, -0.02f, kFloor)};
-
-  const Vec3 to_ball = normalize(Vec3(0.f) - y);
-  const double cos_cone = std::sqrt(1 - 0.0201 * 0.0201 / double(dot(y, y)));
-  const Frame cone = Frame::from_z(to_ball);
   std::array<Estimate, 3> photons;
   Rng rng(test_seed(43), 0);
   constexpr int kPhotons = 2000000;
   for (int i = 0; i < kPhotons; ++i) {
     double weight;
-    const Vec3 d = sample_cone(cone, cos_cone, rng, &weight);
-    weight *= I;
-    const auto out = transmit_through_glass(scene, Ray{y, d}, wl, 2, &weight);
+    const auto out = photon_through_ball(scene, y, I, 0.02, wl, rng, &weight);
     const auto hit = out ? scene.geometry.intersect(*out, kInfinity) : std::nullopt;
     for (size_t k = 0; k < points.size(); ++k) {
       const bool in_disk = hit && std::fabs(hit->p.z - kFloor) < 1e-4f && length(hit->p - points[k]) < kDiskRadius;
