@@ -634,7 +634,7 @@ TEST(SpecularConnection, DirectLightLanesFollowTheGlassDispersion) {
     Rng rng(test_seed(47), 0);  // the same draws for every call: the same random seeds
     const auto a = light_through_dielectrics(scene, x, 0, Point2{}, media, rng);
     EXPECT_TRUE(a && a->count >= 1);
-    return *a;
+    return a.value_or(ArrivingLight{});  // on failure: no paths, so the checks below fail, not crash
   };
   const SampledWavelengths four = SampledWavelengths::from_values(lambdas.data(), pdfs.data(), 4);
   const ArrivingLight all = arrive(constant, four);
