@@ -48,7 +48,7 @@ void render_tile(const Scene& scene, Film& film, int fx0, int fy0, const Tile& t
       }
       for (int s = s0; s < end; ++s) {
         Rng rng = sample_rng(seed, x, y, s);
-        SampledWavelengths lambda = SampledWavelengths::sample_visible(rng.uniform(), n_lambda);
+        SampledWavelengths lambda = scene.camera_wavelengths.sample(rng.uniform(), n_lambda);
         const Point2 film_pos{x + rng.uniform(), y + rng.uniform()};  // box filter
         const Ray ray = scene.camera.generate_ray(film_pos, Point2{rng.uniform(), rng.uniform()});
         const PathRadiance L = trace_path(scene, ray, scene.camera_medium, lambda, rng, stats);

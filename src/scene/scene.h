@@ -16,6 +16,7 @@
 #include "materials/bsdf.h"
 #include "materials/material.h"
 #include "media/medium.h"
+#include "spectra/wavelength_sampling.h"
 #include "tracking/transmittance.h"
 
 namespace chlorovdb {
@@ -54,6 +55,10 @@ enum class DirectLightThroughGlass { connect, block };
 // uniform (guided; measured no better on the default scene, kept to measure:
 // docs/fluorescence.md, "Guided continuations").
 enum class ContinuationDirections { uniform, guided };
+// Camera wavelengths: from a mixture of the eye's importance with the scene's
+// light spectra and the pigments' re-emission (scene), or from the eye's
+// importance alone (visible; lamps with line spectra then make fireflies).
+enum class CameraWavelengths { scene, visible };
 
 struct RenderSettings {
   int width = 512, height = 512;
@@ -77,6 +82,7 @@ struct RenderSettings {
   ExcitationThroughGlass excitation_through_glass = ExcitationThroughGlass::connect;
   DirectLightThroughGlass direct_light_through_glass = DirectLightThroughGlass::connect;
   ContinuationDirections continuation_directions = ContinuationDirections::uniform;
+  CameraWavelengths camera_wavelengths = CameraWavelengths::scene;
   // Both kept to measure what the defaults buy (docs/fluorescence.md); neither
   // applies to the `reference` estimator, which always draws λ' uniformly below
   // λ and uses Q as a roulette, as the thesis does.
@@ -119,6 +125,7 @@ struct Scene {
   std::vector<Material> materials;
   std::vector<Light> lights;
   LightSampler light_sampler;        // camera-path NEE: visible power; uniform environments excluded
+  WavelengthDistribution camera_wavelengths;  // what camera samples draw their lanes from
   std::vector<int> infinite_lights;  // environment lights, seen by rays that escape
   std::vector<Medium> media;
   std::vector<std::string> medium_names;

@@ -109,6 +109,9 @@ RenderSettings read_render_settings(ParamReader& top, const SceneOverrides& o, s
         r->get_enum("continuation_directions", "uniform", {"uniform", "guided"}) == "guided"
             ? ContinuationDirections::guided
             : ContinuationDirections::uniform;
+    s.camera_wavelengths = r->get_enum("camera_wavelengths", "scene", {"scene", "visible"}) == "visible"
+                               ? CameraWavelengths::visible
+                               : CameraWavelengths::scene;
     s.excitation_sampling = r->get_enum("excitation_sampling", "importance", {"importance", "uniform"}) == "uniform"
                                 ? ExcitationSampling::uniform
                                 : ExcitationSampling::importance;
@@ -356,6 +359,44 @@ std::string why_direct_is_not_exact(const Scene& scene) {
     for (const FluorescentPigment& absorber : medium)
       if (absorbs_fluorescence(scene, absorber)) return "fluorescent pigments reabsorb emitted light";
   return {};
+}
+
+// The camera's wavelength density (spectra/wavelength_sampling.h): half the eye's
+// importance, which keeps every visible wavelength sampled; 30 % the lights'
+// visible spectral power times the colour-matching functions (x̄ + ȳ + z̄), which
+// puts lanes on a lamp's emission lines in proportion to what they add to the
+// image; 20 % the fluorescent pigments' emission times the same, where re-emitted
+// light lands. A scene without lights or fluorescence shares the rest.
+WavelengthDistribution camera_wavelength_distribution(const Scene& scene) {
+  if (scene.settings.camera_wavelengths == CameraWavelengths::visible) return WavelengthDistribution::visible();
+  const auto colour = [](float lambda) {
+    const XYZ c = cie_cmf(lambda);
+    return c.x + c.y + c.z;
+  };
+  struct Source {
+    const Spectrum* spectrum;
+    double weight;  // multiplies spectrum(λ)
+  };
+  std::vector<Source> lights, pigments;
+  for (const Light& light : scene.lights) {
+    const Spectrum& s = emission_spectrum(light);
+    const double integral = s.integral(kLambdaMin, kLambdaMax);
+    const double power = light_power(light, scene.geometry, kLambdaMin, kLambdaMax);
+    // power / ∫s: the light's visible power per unit of its spectrum's value.
+    if (integral > 0 && power > 0 && std::isfinite(power / integral)) lights.push_back({&s, power / integral});
+  }
+  for (const auto& medium : scene.fluorescence)
+    for (const FluorescentPigment& fp : medium) pigments.push_back({&fp.emission, 1.0});
+  const auto sum_of = [colour](std::vector<Source> sources) {
+    return [colour, sources = std::move(sources)](float lambda) {
+      double sum = 0;
+      for (const Source& s : sources) sum += s.weight * double((*s.spectrum)(lambda));
+      return sum * colour(lambda);
+    };
+  };
+  return WavelengthDistribution::mixture({{[](float lambda) { return double(visible_wavelength_pdf(lambda)); }, 0.5},
+                                          {sum_of(std::move(lights)), 0.3},
+                                          {sum_of(std::move(pigments)), 0.2}});
 }
 
 void setup_fluorescence(Scene& scene, const std::string& mode) {
@@ -611,6 +652,7 @@ Scene load_scene(const nlohmann::json& json, const std::filesystem::path& file, 
                         : light_power(light, scene.geometry, kLambdaMin, kLambdaMax));
   scene.light_sampler = LightSampler(relative_weights(power));
   setup_fluorescence(scene, fluorescence_mode);
+  scene.camera_wavelengths = camera_wavelength_distribution(scene);
   scene.resolve_medium_policies();
   return scene;
 }

@@ -83,4 +83,71 @@ SampledWavelengths SampledWavelengths::sample_uniform(float u, int count, float 
   return w;
 }
 
+WavelengthDistribution WavelengthDistribution::mixture(const std::vector<Component>& components) {
+  const int bins = int(std::lround((kLambdaMax - kLambdaMin) / kBinWidth));
+  constexpr int kPointsPerBin = 4;  // midpoints of quarter bins: a 1 nm table's line is 8 points
+  std::vector<double> mix(size_t(bins), 0.0);
+  double total_share = 0;
+  for (size_t c = 0; c < components.size(); ++c) {
+    const Component& comp = components[c];
+    if (!(comp.share >= 0) || !std::isfinite(comp.share))
+      throw std::invalid_argument(fmt::format("wavelength mixture: component {} has share {}", c, comp.share));
+    if (comp.share == 0) continue;
+    std::vector<double> mass(size_t(bins), 0.0);
+    double sum = 0;
+    for (int b = 0; b < bins; ++b) {
+      for (int j = 0; j < kPointsPerBin; ++j) {
+        const float lambda = kLambdaMin + kBinWidth * (float(b) + (float(j) + 0.5f) / kPointsPerBin);
+        const double f = comp.shape(lambda);
+        if (!(f >= 0) || !std::isfinite(f))
+          throw std::invalid_argument(
+              fmt::format("wavelength mixture: component {} is {} at {} nm (must be finite and >= 0)", c, f, lambda));
+        mass[size_t(b)] += f;
+      }
+      sum += mass[size_t(b)];
+    }
+    if (!(sum > 0) || !std::isfinite(sum)) continue;  // dark over the camera range (or beyond double)
+    for (int b = 0; b < bins; ++b) mix[size_t(b)] += comp.share * mass[size_t(b)] / sum;
+    total_share += comp.share;
+  }
+  if (!(total_share > 0))
+    throw std::invalid_argument("wavelength mixture: no component has weight over the camera range");
+  WavelengthDistribution d;
+  d.density_.resize(size_t(bins));
+  d.cdf_.resize(size_t(bins) + 1);
+  double cdf = 0;
+  for (int b = 0; b < bins; ++b) {
+    const double p = mix[size_t(b)] / total_share;  // probability of bin b
+    d.density_[size_t(b)] = float(p / kBinWidth);
+    cdf += p;
+    d.cdf_[size_t(b) + 1] = cdf;
+  }
+  d.cdf_.back() = 1.0;
+  return d;
+}
+
+float WavelengthDistribution::pdf(float lambda_nm) const {
+  if (is_visible()) return visible_wavelength_pdf(lambda_nm);
+  if (!(lambda_nm >= kLambdaMin && lambda_nm <= kLambdaMax)) return 0.f;
+  const int b = std::min(int((lambda_nm - kLambdaMin) / kBinWidth), int(density_.size()) - 1);
+  return density_[size_t(b)];
+}
+
+SampledWavelengths WavelengthDistribution::sample(float u, int count) const {
+  if (is_visible()) return SampledWavelengths::sample_visible(u, count);
+  check_count(count);
+  float lambda[kMaxWavelengths], pdf[kMaxWavelengths];
+  const int bins = int(density_.size());
+  for (int i = 0; i < count; ++i) {
+    const float ui = stratum(u, i, count);
+    // Bin b with cdf[b] <= ui < cdf[b+1]: a bin of probability 0 is never chosen.
+    const int b = std::clamp(int(std::upper_bound(cdf_.begin(), cdf_.end(), double(ui)) - cdf_.begin()) - 1, 0, bins - 1);
+    const double p = cdf_[size_t(b) + 1] - cdf_[size_t(b)];
+    const float x = p > 0 ? float(std::clamp((double(ui) - cdf_[size_t(b)]) / p, 0.0, 1.0)) : 0.5f;
+    lambda[i] = std::min(kLambdaMin + kBinWidth * (float(b) + x), kLambdaMax);
+    pdf[i] = this->pdf(lambda[i]);  // the bin λ rounded into (at a bin's edge, the next one's)
+  }
+  return SampledWavelengths::from_values(lambda, pdf, count);
+}
+
 }  // namespace chlorovdb

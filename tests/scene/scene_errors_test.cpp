@@ -183,3 +183,11 @@ TEST(SceneErrors, CommandLineOverrideIsChecked) {
     EXPECT_NE(std::string(e.what()).find("--fluorescence = ful"), std::string::npos) << e.what();
   }
 }
+
+TEST(SceneErrors, UnknownCameraWavelengths) {
+  const std::string msg = load_error(scene_with(R"("render": {"camera_wavelengths": "visable"})"), "bad_lanes.json");
+  EXPECT_NE(msg.find("bad_lanes.json"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("render.camera_wavelengths"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("visable"), std::string::npos) << msg;
+  EXPECT_EQ(load_error(scene_with(R"("render": {"camera_wavelengths": "visible"})")), "");
+}
