@@ -79,6 +79,7 @@ variants_for() {  # $1 scene file
     echo "Q=roulette|--set render.quantum_yield_mode=roulette"
   fi
   for n in 1 2 4 8 16; do echo "wavelengths=$n|--wavelengths $n"; done
+  echo "camera_wavelengths=visible|--set render.camera_wavelengths=visible"
   echo "skips=off|--set render.skip_unneeded_work=false"
 }
 
@@ -266,7 +267,9 @@ instead of ∝ light × ε × λ′ (\`excitation=uniform\`, \`--set render.exci
 and the quantum yield as a roulette instead of a weight (\`Q=roulette\`,
 \`--set render.quantum_yield_mode=roulette\`), both unbiased (docs/fluorescence.md; the thesis's
 estimator always does both, so these two show what each choice buys on its own); wavelengths per
-path (\`--wavelengths\`); and the renderer's skips of unneeded work
+path (\`--wavelengths\`); the camera's wavelengths drawn from the eye's density alone instead of the
+scene's mixture of it with the lights' spectra and the pigments' re-emission
+(\`camera_wavelengths=visible\`, \`--set render.camera_wavelengths=visible\`); and the renderer's skips of unneeded work
 (\`--set render.skip_unneeded_work=false\`). A variant that fails to run is listed under "Not run"
 with its error.
 
