@@ -5,10 +5,10 @@
 // SampledWavelengths::sample_visible draws its lanes from it.
 //
 // WavelengthDistribution: the density a scene's camera wavelengths are drawn from.
-// The eye's importance does not know a scene's
-// sources. A mercury lamp puts a large share of its visible power into 1 nm lines
-// (436, 546, 578 nm): lanes drawn by the eye's density land on a line rarely and then
-// carry its whole energy, one firefly per hit. `mixture` draws λ from a weighted sum
+// The eye's importance does not know a scene's sources. A mercury lamp puts a large
+// share of its visible power into 1 nm lines (436, 546, 578 nm): lanes drawn by the
+// eye's density land on a line rarely and then carry its whole energy, one firefly
+// per hit. `mixture` draws λ from a weighted sum
 // of densities instead (the eye's, the lights' spectra, the pigments' re-emission),
 // tabulated as a piecewise-constant density over [kLambdaMin, kLambdaMax]; lanes stay
 // stratified, in the mixture's CDF, and each lane carries its own pdf, which the film
