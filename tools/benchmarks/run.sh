@@ -172,6 +172,7 @@ for scene in "${scenes[@]}"; do
     group "transmittance estimator (shadow and excitation rays)" '^transmittance' transmittance
     group "fluorescence estimator" '^(fluorescence|excitation|Q)' fluorescence "fluorescence total"
     group "wavelengths per path" '^wavelengths' wavelengths
+    group "camera wavelengths: the scene's mixture (default) or the eye's density" '^camera_wavelengths' camera_wavelengths "total fluorescence"
     group "skipping unneeded work" '^skips' skips
     [ -z "$notes" ] || printf '\nNot run:\n\n| variant | why |\n| --- | --- |\n%s' "$notes"
   )
