@@ -1,5 +1,6 @@
 #include "materials/bsdf.h"
 
+#include <cmath>
 #include <type_traits>
 
 namespace chlorovdb {
@@ -29,7 +30,18 @@ std::optional<BsdfSample> Bsdf::sample(Vec3 wo, float uc, Point2 u) const {
   auto s = std::holds_alternative<DielectricBxdf>(bxdf_)
                ? std::get<DielectricBxdf>(bxdf_).sample(wo_local, uc, lambda_)
                : std::get<InterfaceBxdf>(bxdf_).sample(wo_local);
-  if (s) s->wi = frame.to_world(s->wi);
+  if (!s) return s;
+  const float cos_frame = std::fabs(s->wi.z);
+  s->wi = frame.to_world(s->wi);
+  if (!shading_agrees) {
+    // The delta's weight f·|cos| was made in the geometric frame; callers apply
+    // |cos(wi, ns)| (BsdfSample), so restate f for that cosine. Otherwise each
+    // grazing reflection inside a smooth-shaded glass wall would gain
+    // |cos(wi, ns)| / |cos(wi, ng)| (up to ~10×) along a light guide.
+    const float cos_shading = std::fabs(dot(s->wi, shading_.n));
+    if (!(cos_shading > 0.f)) return std::nullopt;
+    s->f *= cos_frame / cos_shading;
+  }
   return s;
 }
 

@@ -161,6 +161,36 @@ TEST(Dielectric, EtaFollowsTheGeometricNormalWhenShadingDisagrees) {
   EXPECT_LT(dot(t->wi, hit.ng), 0.f);
 }
 
+// The path weight f·|cos(wi, ns)|/pdf of a smooth dielectric is R/P(R) = 1 for a
+// reflection and T/(η²·P(T)) = 1/η² for a refraction, whichever frame sampled
+// it. Where the shading normal disagrees with the geometric one about wo's side
+// the geometric frame samples; its f must still be stated for |cos(wi, ns)|.
+TEST(Dielectric, PathWeightIsFresnelsWhereShadingDisagrees) {
+  Rng rng(test_seed(29), 7);
+  int disagreeing = 0;
+  for (int i = 0; i < 4000; ++i) {
+    SurfaceHit hit;
+    hit.ng = {0, 0, 1};
+    // Shading normals up to ~40° off the geometric one, as on a coarse lathed beaker.
+    hit.ns = normalize(Vec3{0.8f * (rng.uniform() - 0.5f) * 2.f, 0.8f * (rng.uniform() - 0.5f) * 2.f, 1.f});
+    // Grazing directions on either side, where the two normals disagree most often.
+    const float phi = 2.f * kPi * rng.uniform();
+    const float z = (rng.uniform() < 0.5f ? 1.f : -1.f) * 0.2f * rng.uniform();
+    const float r = std::sqrt(std::max(0.f, 1.f - z * z));
+    const Vec3 wo{r * std::cos(phi), r * std::sin(phi), z};
+    if ((dot(wo, hit.ns) > 0.f) != (dot(wo, hit.ng) > 0.f)) ++disagreeing;
+    SampledWavelengths lambda = four_wavelengths();
+    const Bsdf bsdf = make_bsdf(Dielectric{1.5f}, hit, lambda);
+    const auto s = bsdf.sample(wo, rng.uniform(), {0.5f, 0.5f});
+    if (!s) continue;
+    const float weight = s->f[0] * std::fabs(dot(s->wi, hit.ns)) / s->pdf;
+    const float expected = s->is_transmission ? 1.f / (s->eta * s->eta) : 1.f;
+    ASSERT_NEAR(weight, expected, 1e-3f * expected) << "wo " << wo.x << " " << wo.y << " " << wo.z << ", ns " << hit.ns.x
+                                                    << " " << hit.ns.y << " " << hit.ns.z;
+  }
+  EXPECT_GT(disagreeing, 200) << "the case under test must occur";
+}
+
 TEST(Interface, PassesStraightThrough) {
   const Material m = Interface{};
   EXPECT_TRUE(is_interface(m));
