@@ -15,13 +15,16 @@ using namespace chlorovdb::test;
 
 namespace {
 
-void expect_furnace(const Scene& scene, int paths) {
+// Camera rays through pixel (4, 4), or over the whole 8×8 film.
+void expect_furnace(const Scene& scene, int paths, bool whole_film = false) {
   std::array<Estimate, 8> e;
   PathStats stats;
   for (int i = 0; i < paths; ++i) {
     Rng rng = sample_rng(11, i % 7, i / 7, i);
     SampledWavelengths lambda = SampledWavelengths::sample_visible(rng.uniform(), 8);
-    const Ray ray = scene.camera.generate_ray({4.f + rng.uniform(), 4.f + rng.uniform()}, {0.5f, 0.5f});
+    const Point2 film = whole_film ? Point2{8.f * rng.uniform(), 8.f * rng.uniform()}
+                                   : Point2{4.f + rng.uniform(), 4.f + rng.uniform()};
+    const Ray ray = scene.camera.generate_ray(film, {0.5f, 0.5f});
     const PathRadiance L = trace_path(scene, ray, scene.camera_medium, lambda, rng, stats);
     for (int k = 0; k < 8; ++k) e[k].add(L.other[k] + L.fluorescence[k]);
   }
@@ -39,6 +42,23 @@ TEST(Furnace, WhiteDiffuseSphere) {
     "lights": [{"type": "environment", "spectrum": 1}]
   })"));
   expect_furnace(scene, 20000);
+}
+
+// A lossless dielectric is invisible too, also on a coarse smooth-shaded mesh,
+// where grazing rays often meet faces whose interpolated normal disagrees with
+// the face about their side: the dielectric is then sampled in the face's frame
+// and its path weight must still be Fresnel's. The sphere fills the film, so
+// rays reach its silhouette, and inside it light is guided by grazing bounces.
+TEST(Furnace, CoarseSmoothShadedGlassMesh) {
+  const Scene scene = load_scene(write_scene("furnace_glass", R"({
+    "render": {"resolution": [8, 8], "max_depth": 1000, "wavelengths": 8},
+    "camera": {"position": [0, 0, 4], "look_at": [0, 0, 0], "fov": 28},
+    "materials": {"glass": {"type": "dielectric", "ior": 1.5}},
+    "shapes": [{"type": "mesh", "file": ")" + write_smooth_sphere("furnace_glass_ball", 1.f, 6, 12) +
+                                                       R"(", "material": "glass"}],
+    "lights": [{"type": "environment", "spectrum": 1}]
+  })"));
+  expect_furnace(scene, 20000, true);
 }
 
 TEST(Furnace, PureScatteringMediumWithMolecularAndParticlePhase) {

@@ -290,22 +290,6 @@ TEST(SpecularConnection, PartitionWithContinuationsCountsEachPathOnce) {
 namespace chlorovdb::test {
 namespace {
 
-// A smooth-shaded latitude/longitude sphere (vertex normals) as an OBJ file.
-std::string write_smooth_sphere(const std::string& name, float radius) {
-  const TriangleMesh mesh = make_uv_sphere(Vec3(0.f), radius, 24, 48);
-  const auto path = scratch_dir("integrator_tests") / (name + ".obj");
-  std::ofstream out(path);
-  out.precision(9);
-  for (const Vec3& p : mesh.positions) out << "v " << p.x << ' ' << p.y << ' ' << p.z << '\n';
-  for (const Vec3& n : mesh.normals) out << "vn " << n.x << ' ' << n.y << ' ' << n.z << '\n';
-  for (int t = 0; t < mesh.triangle_count(); ++t) {
-    out << 'f';
-    for (int k = 0; k < 3; ++k) out << ' ' << mesh.indices[3 * t + k] + 1 << "//" << mesh.indices[3 * t + k] + 1;
-    out << '\n';
-  }
-  return path.string();
-}
-
 // A round flask: 5 mm glass around 4.5 cm of pigment solution, both smooth-shaded meshes.
 std::string flask_scene(const std::string& light) {
   return dye_scene_head("full") + R"(    {"type": "mesh", "file": ")" + write_smooth_sphere("flask_glass", 0.05f) + R"(", "material": "glass"},

@@ -8,6 +8,7 @@
 
 #include <gtest/gtest.h>
 
+#include "geometry/mesh.h"
 #include "integrator/path_tracer.h"
 #include "scene/scene_loader.h"
 #include "test_seed.h"
@@ -18,6 +19,23 @@ inline std::filesystem::path write_scene(const std::string& name, const std::str
   const auto path = scratch_dir("integrator_tests") / (name + ".json");
   std::ofstream(path) << json;
   return path;
+}
+
+// A smooth-shaded latitude/longitude sphere (vertex normals) as an OBJ file; the
+// coarser it is, the more its interpolated normals disagree with its faces.
+inline std::string write_smooth_sphere(const std::string& name, float radius, int rings = 24, int segments = 48) {
+  const TriangleMesh mesh = make_uv_sphere(Vec3(0.f), radius, rings, segments);
+  const auto path = scratch_dir("integrator_tests") / (name + ".obj");
+  std::ofstream out(path);
+  out.precision(9);
+  for (const Vec3& p : mesh.positions) out << "v " << p.x << ' ' << p.y << ' ' << p.z << '\n';
+  for (const Vec3& n : mesh.normals) out << "vn " << n.x << ' ' << n.y << ' ' << n.z << '\n';
+  for (int t = 0; t < mesh.triangle_count(); ++t) {
+    out << 'f';
+    for (int k = 0; k < 3; ++k) out << ' ' << mesh.indices[3 * t + k] + 1 << "//" << mesh.indices[3 * t + k] + 1;
+    out << '\n';
+  }
+  return path.string();
 }
 
 // Mean and standard error of a scalar estimator.
