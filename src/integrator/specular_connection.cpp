@@ -42,13 +42,23 @@ bool is_dielectric(const Scene& scene, const ShapeBinding& b) {
 }
 // Appends the hit's face to the chain; false when the surface is opaque (not a
 // dielectric) or the chain is full.
-bool append_dielectric_face(const Scene& scene, const SurfaceHit& hit, SpecularChain* c) {
-  if (!is_dielectric(scene, scene.shapes[hit.shape_id]) || c->count == kMaxSpecularChain) return false;
-  const ChainFace f{hit.shape_id, hit.prim_id, hit.ng, dot(hit.ng, hit.p), hit.p};
-  if (!scene.geometry.flat_face(hit.shape_id, hit.prim_id)) c->planar_parallel = false;
+// Appends a face, keeping planar_parallel up to date.
+void append_face(const Scene& scene, const ChainFace& f, SpecularChain* c) {
+  if (!scene.geometry.flat_face(f.shape_id, f.prim_id)) c->planar_parallel = false;
   if (c->count > 0 && std::fabs(dot(f.ng, c->faces[0].ng)) < kParallelCos) c->planar_parallel = false;
   c->faces[c->count++] = f;
+}
+bool append_dielectric_face(const Scene& scene, const SurfaceHit& hit, SpecularChain* c) {
+  if (!is_dielectric(scene, scene.shapes[hit.shape_id]) || c->count == kMaxSpecularChain) return false;
+  append_face(scene, ChainFace{hit.shape_id, hit.prim_id, hit.ng, dot(hit.ng, hit.p), hit.p}, c);
   return true;
+}
+
+// The chain's first j faces, as a chain of their own.
+SpecularChain chain_prefix(const Scene& scene, const SpecularChain& chain, int j) {
+  SpecularChain prefix;
+  for (int i = 0; i < j; ++i) append_face(scene, chain.faces[i], &prefix);
+  return prefix;
 }
 
 // Same shapes, every vertex within `tolerance`: one path (the vertices carry the
@@ -166,11 +176,21 @@ std::array<double, kMaxSpecularChain + 1> chain_indices(const Scene& scene, cons
   return n;
 }
 
+namespace {
+// Whether light leaving the chain's first j faces travels in the medium it
+// leaves the whole chain in (the relative indices agree).
+bool prefix_ends_in_chains_medium(const Scene& scene, const SpecularChain& chain, int j, const Vec3& x, float lambda_nm) {
+  const auto n = chain_indices(scene, chain, x, lambda_nm);
+  return std::fabs(n[j] - n[chain.count]) <= 1e-6 * n[chain.count];
+}
+}  // namespace
+
 bool connection_owns(const Scene& scene, const Vec3& x, const Vec3& y, const SpecularChain& walked, float lambda_nm) {
   if (walked.count == 0) return false;  // straight to the light: the first-segment rule owns it
   const auto c = straight_line_chain(scene, x, y, false);
-  if (!c || c->count != walked.count) return false;
-  const auto path = solve_refracted_path(scene, *c, x, y, false, lambda_nm);
+  if (!c || walked.count > c->count) return false;
+  if (walked.count < c->count && !prefix_ends_in_chains_medium(scene, *c, walked.count, x, lambda_nm)) return false;
+  const auto path = solve_refracted_path(scene, chain_prefix(scene, *c, walked.count), x, y, false, lambda_nm);
   return path && same_vertices({path->face.data(), size_t(path->count)}, {walked.faces.data(), size_t(walked.count)},
                                kOwnedVertexTolerance * length(y - x));
 }
@@ -423,9 +443,21 @@ std::optional<ArrivingLight> light_through_dielectrics(const Scene& scene, const
     for (int j = 0; j < path.count; ++j) dispersed |= is_dispersive(dielectric_of(scene, path.face[j].shape_id));
   };
   std::optional<RefractedPath> seeded;
-  if (const auto chain = straight_line_chain(scene, x, end.y, end.to_infinity))
-    seeded = solve_refracted_path(scene, *chain, x, end.y, end.to_infinity, lambda_nm);
+  const auto chain = straight_line_chain(scene, x, end.y, end.to_infinity);
+  if (chain) seeded = solve_refracted_path(scene, *chain, x, end.y, end.to_infinity, lambda_nm);
   if (seeded) add(*seeded, refracted_path_light(scene, x, medium, light, end, *seeded, media, rng), 1.f);
+  if (chain && std::holds_alternative<AreaLight>(light)) {
+    // A path bent at the first faces can pass beside the rest of the straight
+    // line's chain: from deep in a beaker, out through the free surface and over
+    // the rim that the straight line to the lamp clips. Each prefix of the chain
+    // that ends in the medium the whole chain ends in is solved too (a distinct
+    // path: it crosses fewer faces); connection_owns accepts the same prefixes.
+    for (int j = 1; j < chain->count; ++j) {
+      if (!prefix_ends_in_chains_medium(scene, *chain, j, x, lambda_nm)) continue;
+      if (const auto path = solve_refracted_path(scene, chain_prefix(scene, *chain, j), x, end.y, false, lambda_nm))
+        add(*path, refracted_path_light(scene, x, medium, light, end, *path, media, rng), 1.f);
+    }
+  }
 
   // Area lights leave the other solutions to continuations (the partition above);
   // without glass the straight line is the only path.

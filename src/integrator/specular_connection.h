@@ -17,14 +17,18 @@
 //   solution its seed converges to, if any; others through the same faces are missed.
 // A solved path counts only if each leg really reaches its face and nothing else.
 //
-// Partition with `full` mode's continuation paths (area lights): a continuation
-// from x that reaches an area light at y through dielectric transmissions only
-// is dropped exactly when the solver, seeded by the straight line x → y, returns
-// that same path (connection_owns: same shapes, vertices within tolerance). The
-// solver is deterministic in (x, y, λ'), so each refracted path x → y is counted
-// once: by the connection when the solve from its own endpoint finds it, by the
-// continuation otherwise (other solutions, non-convergence, straight lines that
-// cross other faces than the path, spheres, paths with a reflection).
+// Partition with `full` mode's continuation paths (area lights): a connection
+// to an area light solves the straight line's chain x → y and each of its
+// prefixes that ends in the medium the whole chain ends in (a path refracted at
+// the first faces can pass beside the others: out of a beaker's free surface and
+// over the rim the straight line clips). A continuation from x that reaches an
+// area light at y through dielectric transmissions only is dropped exactly when
+// one of those solves returns that same path (connection_owns: same shapes,
+// vertices within tolerance). The solver is deterministic in (x, y, λ'), so each
+// refracted path x → y is counted once: by the connection when a solve from its
+// own endpoint finds it, by the continuation otherwise (other solutions,
+// non-convergence, straight lines that cross faces the path does not reach or
+// miss faces it crosses, spheres, paths with a reflection).
 // Delta lights have no second strategy: their other solutions come from SMS's
 // unbiased estimate (random seeds, each found solution weighted by the number of
 // further seeds it takes to find it again); paths with a reflection, more than
@@ -152,7 +156,7 @@ struct ArrivingLight {
     Vec3 wi;
     SampledSpectrum L;
   };
-  std::array<Path, 2> paths;
+  std::array<Path, kMaxSpecularChain> paths;  // the straight line's, its chain's prefixes' or a seed's
   int count = 0;
 };
 std::optional<ArrivingLight> light_through_dielectrics(const Scene& scene, const ShadowOrigin& from, int light_index,
