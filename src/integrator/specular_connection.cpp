@@ -40,14 +40,14 @@ bool leg_reaches_face(const Scene& scene, Ray ray, float dist, const ChainFace& 
 bool is_dielectric(const Scene& scene, const ShapeBinding& b) {
   return b.material >= 0 && std::holds_alternative<Dielectric>(scene.materials[b.material]);
 }
-// Appends the hit's face to the chain; false when the surface is opaque (not a
-// dielectric) or the chain is full.
 // Appends a face, keeping planar_parallel up to date.
 void append_face(const Scene& scene, const ChainFace& f, SpecularChain* c) {
   if (!scene.geometry.flat_face(f.shape_id, f.prim_id)) c->planar_parallel = false;
   if (c->count > 0 && std::fabs(dot(f.ng, c->faces[0].ng)) < kParallelCos) c->planar_parallel = false;
   c->faces[c->count++] = f;
 }
+// Appends the hit's face to the chain; false when the surface is opaque (not a
+// dielectric) or the chain is full.
 bool append_dielectric_face(const Scene& scene, const SurfaceHit& hit, SpecularChain* c) {
   if (!is_dielectric(scene, scene.shapes[hit.shape_id]) || c->count == kMaxSpecularChain) return false;
   append_face(scene, ChainFace{hit.shape_id, hit.prim_id, hit.ng, dot(hit.ng, hit.p), hit.p}, c);

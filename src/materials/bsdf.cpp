@@ -37,7 +37,7 @@ std::optional<BsdfSample> Bsdf::sample(Vec3 wo, float uc, Point2 u) const {
     // The delta's weight f·|cos| was made in the geometric frame; callers apply
     // |cos(wi, ns)| (BsdfSample), so restate f for that cosine. Otherwise each
     // grazing reflection inside a smooth-shaded glass wall would gain
-    // |cos(wi, ns)| / |cos(wi, ng)| (up to ~10×) along a light guide.
+    // |cos(wi, ns)| / |cos(wi, ng)| (up to ~12× on the beaker) along a light guide.
     const float cos_shading = std::fabs(dot(s->wi, shading_.n));
     if (!(cos_shading > 0.f)) return std::nullopt;
     s->f *= cos_frame / cos_shading;
