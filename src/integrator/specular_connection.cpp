@@ -177,11 +177,15 @@ std::array<double, kMaxSpecularChain + 1> chain_indices(const Scene& scene, cons
 }
 
 namespace {
-// Whether light leaving the chain's first j faces travels in the medium it
-// leaves the whole chain in (the relative indices agree).
-bool prefix_ends_in_chains_medium(const Scene& scene, const SpecularChain& chain, int j, const Vec3& x, float lambda_nm) {
+// Bit j (0 < j < chain.count) is set when light leaving the chain's first j faces
+// travels in the medium it leaves the whole chain in (the relative indices
+// agree): that prefix can be a path to the light of its own.
+unsigned exit_prefixes(const Scene& scene, const SpecularChain& chain, const Vec3& x, float lambda_nm) {
   const auto n = chain_indices(scene, chain, x, lambda_nm);
-  return std::fabs(n[j] - n[chain.count]) <= 1e-6 * n[chain.count];
+  unsigned prefixes = 0;
+  for (int j = 1; j < chain.count; ++j)
+    if (std::fabs(n[j] - n[chain.count]) <= 1e-6 * n[chain.count]) prefixes |= 1u << j;
+  return prefixes;
 }
 }  // namespace
 
@@ -189,7 +193,7 @@ bool connection_owns(const Scene& scene, const Vec3& x, const Vec3& y, const Spe
   if (walked.count == 0) return false;  // straight to the light: the first-segment rule owns it
   const auto c = straight_line_chain(scene, x, y, false);
   if (!c || walked.count > c->count) return false;
-  if (walked.count < c->count && !prefix_ends_in_chains_medium(scene, *c, walked.count, x, lambda_nm)) return false;
+  if (walked.count < c->count && !(exit_prefixes(scene, *c, x, lambda_nm) >> walked.count & 1u)) return false;
   const auto path = solve_refracted_path(scene, chain_prefix(scene, *c, walked.count), x, y, false, lambda_nm);
   return path && same_vertices({path->face.data(), size_t(path->count)}, {walked.faces.data(), size_t(walked.count)},
                                kOwnedVertexTolerance * length(y - x));
@@ -452,8 +456,9 @@ std::optional<ArrivingLight> light_through_dielectrics(const Scene& scene, const
     // the rim that the straight line to the lamp clips. Each prefix of the chain
     // that ends in the medium the whole chain ends in is solved too (a distinct
     // path: it crosses fewer faces); connection_owns accepts the same prefixes.
+    const unsigned prefixes = chain->count > 1 ? exit_prefixes(scene, *chain, x, lambda_nm) : 0u;
     for (int j = 1; j < chain->count; ++j) {
-      if (!prefix_ends_in_chains_medium(scene, *chain, j, x, lambda_nm)) continue;
+      if (!(prefixes >> j & 1u)) continue;
       if (const auto path = solve_refracted_path(scene, chain_prefix(scene, *chain, j), x, end.y, false, lambda_nm))
         add(*path, refracted_path_light(scene, x, medium, light, end, *path, media, rng), 1.f);
     }
