@@ -3,36 +3,39 @@
 // (excitation rays) or a scattering point on a surface or in a medium (camera
 // paths' next-event estimation toward delta lights: the caustic on a floor) to a
 // point, spot, distant or area light through a chain of up to kMaxSpecularChain
-// dielectric faces, by solving for the refracted path at the hero wavelength
-// (Sellmeier glass bends each λ by its own index).
+// dielectric faces, each crossed or mirrored, by solving for the specular path
+// at the hero wavelength (Sellmeier glass bends each λ by its own index).
 //
-// The chain is seeded by the straight line from the point x to the light point
+// The first chain is the straight line's from the point x to the light point
 // y: the dielectric faces it crosses, in order. Two solvers, one per geometry:
-// - all faces parallel planes (box faces, flat-shaded triangles): Snell's
-//   invariant s = n_i sin θ_i, a 1-D monotone root, exact and unique (the
-//   optical path length is strictly convex);
-// - anything else on meshes (smooth-shaded triangles, non-parallel planes):
-//   manifold next-event estimation (Hanika, Droske & Fascione 2015; the Newton
-//   walk of Zeltner, Georgiev & Jakob 2020), specular_manifold.cpp. It finds the
-//   solution its seed converges to, if any; others through the same faces are missed.
+// - all faces crossed, parallel planes (box faces, flat-shaded triangles):
+//   Snell's invariant s = n_i sin θ_i, a 1-D monotone root, exact and unique
+//   (the optical path length is strictly convex);
+// - anything else on meshes and boxes (smooth-shaded triangles, non-parallel
+//   planes, reflections): manifold next-event estimation (Hanika, Droske &
+//   Fascione 2015; the Newton walk of Zeltner, Georgiev & Jakob 2020),
+//   specular_manifold.cpp. It finds the solution its seed converges to, if any.
 // A solved path counts only if each leg really reaches its face and nothing else.
 //
-// Partition with `full` mode's continuation paths (area lights): a connection
-// to an area light solves the straight line's chain x → y and each of its
-// prefixes that ends in the medium the whole chain ends in (a path refracted at
-// the first faces can pass beside the others: out of a beaker's free surface and
-// over the rim the straight line clips). A continuation from x that reaches an
-// area light at y through dielectric transmissions only is dropped exactly when
-// one of those solves returns that same path (connection_owns: same shapes,
-// vertices within tolerance). The solver is deterministic in (x, y, λ'), so each
-// refracted path x → y is counted once: by the connection when a solve from its
-// own endpoint finds it, by the continuation otherwise (other solutions,
-// non-convergence, straight lines that cross faces the path does not reach or
-// miss faces it crosses, spheres, paths with a reflection).
-// Delta lights have no second strategy: their other solutions come from SMS's
-// unbiased estimate (random seeds, each found solution weighted by the number of
-// further seeds it takes to find it again); paths with a reflection, more than
-// kMaxSpecularChain faces or a sphere are not found (docs/fluorescence.md).
+// Other solutions, for every light, come from SMS's unbiased estimate: one
+// random seed chain (a direction from x scattered on through the glass as the
+// glass would: reflected with probability R; SeedPolicy can keep it to
+// refraction), each solution it finds weighted by the number of further seeds
+// it takes to find it again. So the light through a cuvette's lid, the light a
+// beaker's wall mirrors out of its free surface, are found where the straight
+// line crosses other faces.
+//
+// Partition with `full` mode's continuation paths (area lights): a
+// continuation from x that reaches an area light at y through specular glass
+// events only is dropped when the straight line's chain or one of its prefixes
+// that ends in the medium the whole chain ends in (a path refracted at the first
+// faces can pass beside the others: out of a beaker's free surface and over the
+// rim the straight line clips) solves to that same path (same shapes, vertices
+// within tolerance), and otherwise with the probability that SMS's capped count
+// holds it (connection_owns). Each specular path x → y is so counted once in
+// expectation; continuations keep the paths no seed converges to (more than
+// kMaxSpecularChain faces, spheres). Delta lights have no second strategy:
+// those paths are not found (docs/fluorescence.md).
 #include <array>
 #include <optional>
 #include <span>
@@ -62,18 +65,20 @@ std::optional<double> solve_planar_invariant(std::span<const double> h, std::spa
 double planar_solid_angle_per_area(std::span<const double> h, std::span<const double> n, double s);
 
 // ---- Chains in a scene ----
-// A dielectric face crossed: the shape, the triangle (or box face) and its
-// plane (geometric normal, offset dot(ng, p)), and where the path meets it.
+// A dielectric face met: the shape, the triangle (or box face) and its plane
+// (geometric normal, offset dot(ng, p)), where the path meets it, and whether
+// it reflects there (a mirror vertex) instead of crossing.
 struct ChainFace {
   int shape_id = -1, prim_id = -1;
   Vec3 ng;
   float offset = 0.f;
   Vec3 p;
+  bool reflect = false;
 };
 struct SpecularChain {
   std::array<ChainFace, kMaxSpecularChain> faces;
   int count = 0;
-  bool planar_parallel = true;  // all faces flat-shaded planes with parallel normals
+  bool planar_parallel = true;  // all faces crossed, flat-shaded planes with parallel normals
 };
 
 // The dielectric faces crossed by the straight line from x toward y (or along
@@ -81,7 +86,7 @@ struct SpecularChain {
 // more than kMaxSpecularChain dielectric faces are.
 std::optional<SpecularChain> straight_line_chain(const Scene& scene, const Vec3& x, const Vec3& y, bool to_infinity);
 
-// The solved refracted path: its vertices (face[j].p, on the triangle face[j]
+// The solved specular path: its vertices (face[j].p, on the triangle face[j]
 // names, with the shading normal ns[j] there), leg directions toward the light,
 // the layers' relative indices and the generalised geometry term.
 struct RefractedPath {
@@ -108,60 +113,75 @@ std::optional<RefractedPath> solve_refracted_path(const Scene& scene, const Spec
 // with the closed form on planar chains).
 std::optional<RefractedPath> solve_manifold_path(const Scene& scene, const SpecularChain& chain, const Vec3& x,
                                                  const Vec3& y, bool to_infinity, float lambda_nm);
-// Whether the chain enters face j's shape: the step from the previous vertex
-// (x for j = 0) to face j's point runs against its outward normal.
+// Whether the chain arrives at face j from outside its shape: the step from the
+// previous vertex (x for j = 0) to face j's point runs against its outward normal.
 bool chain_enters(const SpecularChain& chain, int j, const Vec3& x);
-// Relative index n_i of every layer (n_0 = 1 at x): entering a face multiplies by its IOR.
+// Relative index n_i of every layer (n_0 = 1 at x): entering a face multiplies
+// by its IOR, leaving divides by it, a reflection keeps it.
 std::array<double, kMaxSpecularChain + 1> chain_indices(const Scene& scene, const SpecularChain& chain, const Vec3& x,
                                                         float lambda_nm);
 
 // SMS's random seed (Zeltner, Georgiev & Jakob 2020): the faces met by the ray
-// from x along d refracted forward through every dielectric face (transmission
-// at the shading normal, at `lambda_nm`), up to the leg that passes the light
-// point y (to_infinity: the leg that leaves the scene). nullopt when the ray
-// meets an opaque surface or total internal reflection first, never passes y,
-// crosses more than kMaxSpecularChain faces or none.
-std::optional<SpecularChain> refracted_seed_chain(const Scene& scene, const Vec3& x, const Vec3& d, const Vec3& y,
-                                                  bool to_infinity, float lambda_nm);
+// from x along d, reflected or refracted at every dielectric face as a
+// smooth dielectric would scatter it (reflection with the Fresnel probability
+// R at the shading normal, at `lambda_nm`; always under total internal
+// reflection), up to the leg that passes the light point y (to_infinity: the
+// leg that leaves the scene). Without `reflect_too` it refracts only. nullopt
+// when the ray meets an opaque surface (or, refracting only, total internal
+// reflection) first, never passes y, meets more than kMaxSpecularChain faces
+// or none.
+std::optional<SpecularChain> specular_seed_chain(const Scene& scene, const Vec3& x, const Vec3& d, const Vec3& y,
+                                                 bool to_infinity, float lambda_nm, bool reflect_too, Rng& rng);
 // One random seed: a direction from x (half in the 30° cone around the straight
 // line to y, half toward a point uniform by area on a dielectric shape), its
-// refracted_seed_chain, and the path the solver converges to from there, if any.
+// specular_seed_chain, and the path the solver converges to from there, if any.
 std::optional<RefractedPath> solve_from_random_seed(const Scene& scene, const Vec3& x, const Vec3& y, bool to_infinity,
-                                                    float lambda_nm, Rng& rng);
+                                                    float lambda_nm, bool reflect_too, Rng& rng);
 
-// A path a continuation walked from x at λ (dielectric transmissions at
-// `walked`, then the area light at y): true when the connection produces it.
-bool connection_owns(const Scene& scene, const Vec3& x, const Vec3& y, const SpecularChain& walked, float lambda_nm);
+// A path a continuation walked from x at λ (specular glass events at `walked`,
+// then the area light at y): true when a deterministic solve of the connection
+// (the straight line's chain or one of its prefixes) returns it.
+bool solved_from_straight_line(const Scene& scene, const Vec3& x, const Vec3& y, const SpecularChain& walked,
+                               float lambda_nm);
+// True when the connection owns that path: solved from the straight line, or
+// else with the probability that the connection's random seeds count it (one
+// of kMaxSeedTrials fresh seeds converges to it), so that the continuation's
+// share and the seeds' add up to the path once.
+bool connection_owns(const Scene& scene, const Vec3& x, const Vec3& y, const SpecularChain& walked, float lambda_nm,
+                     Rng& rng);
 
 // Shapes with a smooth dielectric material: zero means no connection needs solving.
 int dielectric_shape_count(const Scene& scene);
 
-// Light from one light reaching a point through the dielectric chain seeded by
-// the straight line to one light sample (area lights: a point uniform by area
-// from `u`), plus for delta lights the SMS estimate of one other solution: each
-// path's direction at the point (first leg, toward the light) and what it
+// Light from one light reaching a point through the dielectric chain of the
+// straight line to one light sample (area lights: a point uniform by area from
+// `u`, and the chain's prefixes), plus the SMS estimate of one other solution:
+// each path's direction at the point (first leg, toward the light) and what it
 // brings, per lane of media.lambda(): radiance times solid angle,
-//   L · Π(1 − R_i) · T_media · (n_x / n_light)² · dω/dA_⊥ · |cos θ_light| / pdf_A,
-// or the delta lights' equivalents (R_i at the shading normal, as the path
-// tracer refracts). A scattering point weights each path by its phase function
+//   L · Π F_i · T_media · (n_x / n_light)² · dω/dA_⊥ · |cos θ_light| / pdf_A,
+// F_i = 1 − R_i where the path crosses, R_i where it reflects, or the delta
+// lights' equivalents (R_i at the shading normal, as the path tracer scatters). A scattering point weights each path by its phase function
 // or BSDF at wi; summed as they are, they are the fluence rate. The point is a
 // medium point or a surface point (`from.hit`, offset off its surface toward
 // the light). Paths through dispersive glass carry the hero wavelength only,
-// standing for all lanes. The random seed runs with `seed_probability`, its
-// estimate divided by it (camera paths run it at one connection in four). No
-// path when blocked or none is found; nullopt for environment lights (the
-// caller falls back).
+// standing for all lanes. The random seed runs with `seeds.probability`, its
+// estimate divided by it, and may reflect if `seeds.reflect`. No path when
+// blocked or none is found; nullopt for environment lights (the caller falls back).
+struct SeedPolicy {
+  float probability = 1.f;
+  bool reflect = true;
+};
 struct ArrivingLight {
   struct Path {
     Vec3 wi;
     SampledSpectrum L;
   };
-  std::array<Path, kMaxSpecularChain> paths;  // the straight line's, its chain's prefixes' or a seed's
+  std::array<Path, kMaxSpecularChain + 1> paths;  // the straight line's, its chain's prefixes' and a seed's
   int count = 0;
 };
 std::optional<ArrivingLight> light_through_dielectrics(const Scene& scene, const ShadowOrigin& from, int light_index,
                                                        Point2 u, PreparedMedia& media, Rng& rng,
-                                                       float seed_probability = 1.f);
+                                                       SeedPolicy seeds = {});
 // The fluence rate at a medium point x (one wavelength: wl.count() == 1) that
 // light_through_dielectrics finds: the excitation ray's connection.
 std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3& x, int medium, int light_index,

@@ -317,8 +317,10 @@ std::optional<RefractedPath> solve_manifold_path(const Scene& scene, const Specu
   }
   if (!converged) return std::nullopt;
 
-  // The solution must cross every face in the seed's sense, on the same side of
-  // both normals (where they disagree the path tracer refracts at ng instead).
+  // The solution must cross (or mirror at) every face in the seed's sense, on the
+  // same side of both normals (where they disagree the path tracer scatters in
+  // the geometric frame instead). A mirror vertex's constraint is a crossing's
+  // with equal indices, which a straight line through the face also meets.
   RefractedPath P;
   P.count = k;
   P.n = M.eta;
@@ -331,11 +333,12 @@ std::optional<RefractedPath> solve_manifold_path(const Scene& scene, const Specu
     const ManifoldVertex& vj = M.v[j];
     const Vec3d d_in = to_double(P.dir[j]), d_out = to_double(P.dir[j + 1]);
     const double sense = entering[j] ? -1 : 1;
-    if (!(dot(d_in, vj.ng) * sense > 0 && dot(d_out, vj.ng) * sense > 0 && dot(d_in, vj.n) * sense > 0 &&
-          dot(d_out, vj.n) * sense > 0))
+    const double sense_out = chain.faces[j].reflect ? -sense : sense;
+    if (!(dot(d_in, vj.ng) * sense > 0 && dot(d_out, vj.ng) * sense_out > 0 && dot(d_in, vj.n) * sense > 0 &&
+          dot(d_out, vj.n) * sense_out > 0))
       return std::nullopt;
     const Vec3 ng = to_float(vj.ng), p = to_float(vj.x);
-    P.face[j] = ChainFace{vj.shape_id, vj.prim_id, ng, dot(ng, p), p};
+    P.face[j] = ChainFace{vj.shape_id, vj.prim_id, ng, dot(ng, p), p, chain.faces[j].reflect};
     P.ns[j] = to_float(vj.n);
   }
 
