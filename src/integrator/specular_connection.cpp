@@ -408,16 +408,23 @@ bool same_path(const RefractedPath& a, const RefractedPath& b, float tolerance) 
   return same_vertices({a.face.data(), size_t(a.count)}, {b.face.data(), size_t(b.count)}, tolerance);
 }
 
-// Random seeds drawn per other solution before SMS's count gives up. Delta
+// Random seeds drawn per other solution S before SMS's count gives up. Delta
 // lights have no other strategy: the cap scales a solution's estimate by
-// 1 − (1 − p)^kMaxSeedTrials, a bias only where p < 1/kMaxSeedTrials. Area
-// lights give continuations the rest (connection_owns), exact at any cap, and
-// a low cap bounds the work spent on rare solutions: seeds that reflect find
-// many (a beaker's curved wall mirrors the lamp from every triangle), and on
-// glass_UVB_5uM_Q0.23 1024 took 1.4× the CPU time of 64 at the same
-// fluorescence error (relMSE 0.106 and 0.105 at 512 spp, 6 seeds).
-constexpr int kMaxSeedTrials = 1024;
-constexpr int kMaxSeedTrialsBesideContinuations = 64;
+// 1 − (1 − p)^cap, a bias only where p < 1/cap. Area lights give continuations
+// the rest (connection_owns), exact for any cap that depends on S alone, so a
+// path with a mirror vertex gets a low one: seeds that reflect find many rare
+// solutions (a beaker's curved wall mirrors the lamp from every triangle), and
+// on glass_UVB_5uM_Q0.23 a cap of 1024 for them took 1.3× the CPU time of 64 at
+// the same fluorescence error (relMSE 0.106 and 0.105 at 512 spp, 6 seeds).
+// Crossings only keep 1024: the light through a cuvette's lid has p ≈ 2 %, and
+// left to continuations (27 % of the time with a cap of 64) it is the tail.
+int max_seed_trials(bool area_light, std::span<const ChainFace> faces) {
+  constexpr int kMaxSeedTrials = 1024, kMaxMirroredSeedTrials = 64;
+  if (!area_light) return kMaxSeedTrials;
+  for (const ChainFace& f : faces)
+    if (f.reflect) return kMaxMirroredSeedTrials;
+  return kMaxSeedTrials;
+}
 
 }  // namespace
 
@@ -444,11 +451,11 @@ bool connection_owns(const Scene& scene, const Vec3& x, const Vec3& y, const Spe
   SpecularChain own;
   for (int j = 0; j < walked.count; ++j) append_face(scene, walked.faces[j], &own);
   if (!is_walked(solve_refracted_path(scene, own, x, y, false, lambda_nm))) return false;
-  // SMS's count stops at N = kMaxSeedTrialsBesideContinuations, so the
-  // connection holds S with weight 1 − (1 − p)^N: the walk keeps S exactly when
-  // N fresh seeds (the excitation connection's: reflecting too) all miss it,
-  // with probability (1 − p)^N.
-  for (int trial = 0; trial < kMaxSeedTrialsBesideContinuations; ++trial)
+  // SMS's count stops at N = max_seed_trials(S), so the connection holds S with
+  // weight 1 − (1 − p)^N: the walk keeps S exactly when N fresh seeds (the
+  // excitation connection's: reflecting too) all miss it, with probability (1 − p)^N.
+  const int max_trials = max_seed_trials(true, walked_faces);
+  for (int trial = 0; trial < max_trials; ++trial)
     if (is_walked(solve_from_seed(scene, dielectrics, x, y, false, lambda_nm, true, rng))) return true;
   return false;
 }
@@ -522,13 +529,11 @@ std::optional<ArrivingLight> light_through_dielectrics(const Scene& scene, const
   // p(S); the number of seeds drawn until one converges to S again is geometric
   // with mean 1/p(S), so f(S) times that count estimates f(S)/p(S) and the sum
   // over S is unbiased. The deterministic solutions are counted above, so a seed
-  // that returns one adds nothing. The count is capped (kMaxSeedTrials, or
-  // kMaxSeedTrialsBesideContinuations for area lights); the expected work is
-  // one seed plus one geometric run per other solution, whatever the p.
+  // that returns one adds nothing. The count is capped (max_seed_trials); the
+  // expected work is one seed plus one geometric run per other solution,
+  // whatever the p.
   const int dielectrics = dielectric_shape_count(scene);
   if (dielectrics > 0 && (seeds.probability >= 1.f || rng.uniform() < seeds.probability)) {
-    const int max_trials =
-        std::holds_alternative<AreaLight>(light) ? kMaxSeedTrialsBesideContinuations : kMaxSeedTrials;
     const auto seed = [&] {
       return solve_from_seed(scene, dielectrics, x, end.y, end.to_infinity, lambda_nm, seeds.reflect, rng);
     };
@@ -540,6 +545,8 @@ std::optional<ArrivingLight> light_through_dielectrics(const Scene& scene, const
     if (found && !known) {
       const SampledSpectrum L = refracted_path_light(scene, x, medium, light, end, *found, media, rng);
       if (!L.is_black()) {
+        const int max_trials =
+            max_seed_trials(std::holds_alternative<AreaLight>(light), {found->face.data(), size_t(found->count)});
         int trials = 1;
         for (; trials < max_trials; ++trials) {
           const auto again = seed();
