@@ -183,7 +183,8 @@ std::optional<ArrivingLight> light_through_dielectrics(const Scene& scene, const
                                                        Point2 u, PreparedMedia& media, Rng& rng,
                                                        SeedPolicy seeds = {});
 // The fluence rate at a medium point x (one wavelength: wl.count() == 1) that
-// light_through_dielectrics finds: the excitation ray's connection.
+// light_through_dielectrics finds: the excitation ray's connection (its random
+// seed at one connection in four for area lights, at every one for delta lights).
 std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3& x, int medium, int light_index,
                                                  Point2 u, PreparedMedia& media, Rng& rng);
 
