@@ -11,6 +11,11 @@
 
 using namespace chlorovdb;
 
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  fuzz::use_one_thread();
+  return 0;
+}
+
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   const auto path = fuzz::write_input("input.csv", data, size);
   fuzz::run_expecting_input_errors("read_csv_table", [&] {

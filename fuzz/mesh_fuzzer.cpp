@@ -78,6 +78,11 @@ void voxelize_tiny(const TriangleMesh& mesh, VoxelizeMode mode, const std::strin
 
 }  // namespace
 
+extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  fuzz::use_one_thread();
+  return 0;
+}
+
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
   if (size == 0) return 0;
   const size_t format = format_of(data[0]);

@@ -1,7 +1,7 @@
 # cmake -DFUZZER=... -DCORPUS=dir -DSEEDS="dir;dir" -DDICT=file -DSECONDS=n -DMAXLEN=bytes -DARTIFACTS=dir/ -P run_fuzzer.cmake
 # cmake -DFUZZER=... -DREPLAY=dir -P run_fuzzer.cmake
 # Fuzz mode: one bounded libFuzzer run: a fixed seed, SECONDS of wall time, 10 s per input
-# at most (a longer one is a hang and fails the run), crashes kept in ARTIFACTS.
+# at most (a longer one is a hang and fails the run), crashes kept in ARTIFACTS and printed in hex.
 # A fresh scratch corpus each time: the run depends only on the seeds (tools/fuzz.sh keeps its own).
 # Replay mode: every file in REPLAY (the regression inputs in fuzz/crashes/<target>/) runs once,
 # 10 s each at most; any crash, sanitizer report, unexpected exception or hang fails.
@@ -34,5 +34,12 @@ execute_process(COMMAND ${FUZZER} -seed=1 -max_total_time=${SECONDS} -timeout=10
                         ${CORPUS} ${seed_dirs}
                 RESULT_VARIABLE result)
 if(NOT result EQUAL 0)
+  # The reproducer in hex, last in the log: a CI log keeps its end, not the artifact.
+  # Turn it back into a file with `xxd -r -p hex.txt input`.
+  file(GLOB found LIST_DIRECTORIES false ${ARTIFACTS}*)
+  foreach(artifact ${found})
+    file(READ ${artifact} bytes LIMIT 4096 HEX)
+    message("reproducer ${artifact} (first 4096 bytes, hex):\n${bytes}")
+  endforeach()
   message(FATAL_ERROR "${FUZZER} found a problem (exit ${result}); reproducer in ${ARTIFACTS}")
 endif()

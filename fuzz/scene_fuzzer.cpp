@@ -30,6 +30,7 @@ void write_side_files() {
 }  // namespace
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
+  fuzz::use_one_thread();
   write_side_files();
   return 0;
 }
