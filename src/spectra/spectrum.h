@@ -3,6 +3,7 @@
 // tabulated (piecewise linear between samples, zero outside the table: tables
 // are never extrapolated), blackbody (Planck, normalised to peak 1), Gaussian.
 // Every spectrum carries a scale and a human-readable provenance string.
+#include <cstdint>
 #include <memory>
 #include <optional>
 #include <string>
@@ -24,7 +25,11 @@ class Spectrum {
   struct Tabulated {
     std::vector<float> lambda;  // strictly increasing, nm
     std::vector<float> value;
-    float inv_step = 0.f;  // 1/nm when the samples are evenly spaced (O(1) lookup), else 0
+    // locate()'s O(1) index guess: cell k = ⌊(λ − lambda[0]) · inv_cell⌋. Evenly spaced
+    // tables: one cell per segment, the cell is the segment. Others: two cells per
+    // segment on average, and guide[k] is the segment the cell's start lies in.
+    float inv_cell = 0.f;  // 1/nm
+    std::vector<uint32_t> guide;  // empty for evenly spaced tables
     // Where lambda_nm lies: in segment [lambda[i], lambda[i+1]] at fraction x, so that
     // the spectrum there is (1 - x) value[i] + x value[i+1]. Nothing outside the table (or NaN).
     struct Position {

@@ -123,6 +123,12 @@ WavelengthDistribution WavelengthDistribution::mixture(const std::vector<Compone
     d.cdf_[size_t(b) + 1] = cdf;
   }
   d.cdf_.back() = 1.0;
+  d.guide_.resize(size_t(bins));
+  for (int k = 0, b = 0; k < bins; ++k) {
+    const double u = double(k) / bins;
+    while (b + 1 < bins && d.cdf_[size_t(b) + 1] <= u) ++b;
+    d.guide_[size_t(k)] = uint32_t(b);
+  }
   return d;
 }
 
@@ -140,8 +146,12 @@ SampledWavelengths WavelengthDistribution::sample(float u, int count) const {
   const int bins = int(density_.size());
   for (int i = 0; i < count; ++i) {
     const float ui = stratum(u, i, count);
-    // Bin b with cdf[b] <= ui < cdf[b+1]: a bin of probability 0 is never chosen.
-    const int b = std::clamp(int(std::upper_bound(cdf_.begin(), cdf_.end(), double(ui)) - cdf_.begin()) - 1, 0, bins - 1);
+    // Bin b with cdf[b] <= ui < cdf[b+1]: a bin of probability 0 is never chosen. The
+    // guide's bin is corrected both ways, so rounding in the cell index cannot matter.
+    const double uid = double(ui);
+    int b = int(guide_[std::min(size_t(uid * bins), size_t(bins) - 1)]);
+    while (b > 0 && cdf_[size_t(b)] > uid) --b;
+    while (b + 1 < bins && cdf_[size_t(b) + 1] <= uid) ++b;
     const double p = cdf_[size_t(b) + 1] - cdf_[size_t(b)];
     const float x = p > 0 ? float(std::clamp((double(ui) - cdf_[size_t(b)]) / p, 0.0, 1.0)) : 0.5f;
     lambda[i] = std::min(kLambdaMin + kBinWidth * (float(b) + x), kLambdaMax);

@@ -13,6 +13,7 @@
 // tabulated as a piecewise-constant density over [kLambdaMin, kLambdaMax]; lanes stay
 // stratified, in the mixture's CDF, and each lane carries its own pdf, which the film
 // divides by, so the image's expectation does not depend on the mixture.
+#include <cstdint>
 #include <functional>
 #include <vector>
 
@@ -52,6 +53,9 @@ class WavelengthDistribution {
  private:
   std::vector<float> density_;  // per bin, 1/nm
   std::vector<double> cdf_;     // bins + 1 entries, from 0 to 1
+  // guide_[k]: the bin u = k / bins falls in; sample() walks from there instead of
+  // searching the whole CDF.
+  std::vector<uint32_t> guide_;
 };
 
 }  // namespace chlorovdb

@@ -1,6 +1,8 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <variant>
 
 #include "spectra/csv.h"
 #include "spectra/library.h"
@@ -34,6 +36,38 @@ TEST(Spectrum, TableLookupsEqualCsvRowsUniformStep) { expect_table_matches_csv("
 
 TEST(Spectrum, TableLookupsEqualCsvRowsIrregularStep) {
   expect_table_matches_csv("chlorophyll_a_molar_extinction.csv", "value");
+}
+
+// locate()'s guide (one index per half average spacing) walked to the segment a
+// binary search finds, on a table whose spacing runs from 0.01 to 50 nm: at every knot,
+// the floats beside it, and 20 000 points between.
+TEST(Spectrum, IrregularTableLocatesTheSegmentABinarySearchFinds) {
+  std::vector<float> lambda{300.f}, value{0.f};
+  const float steps[] = {0.01f, 50.f, 0.3f, 0.01f, 0.01f, 7.f, 0.5f, 25.f, 0.02f, 1.f};
+  for (int r = 0; r < 30; ++r) {
+    lambda.push_back(lambda.back() + steps[r % 10]);
+    value.push_back(float(r % 7));
+  }
+  const Spectrum s = Spectrum::tabulated(lambda, value);
+  const auto& table = std::get<Spectrum::Tabulated>(s.representation());
+  ASSERT_FALSE(table.guide.empty());
+  const auto expect_binary_search = [&](float l) {
+    const auto at = table.locate(l);
+    ASSERT_TRUE(at.has_value()) << l;
+    const size_t i = std::min(size_t(std::upper_bound(lambda.begin(), lambda.end(), l) - lambda.begin()) - 1,
+                              lambda.size() - 2);
+    ASSERT_EQ(at->i, i) << l << " nm";
+    ASSERT_EQ(at->x, (l - lambda[i]) / (lambda[i + 1] - lambda[i])) << l << " nm";
+  };
+  for (size_t i = 0; i < lambda.size(); ++i) {
+    expect_binary_search(lambda[i]);
+    if (i > 0) expect_binary_search(std::nextafter(lambda[i], 0.f));
+    if (i + 1 < lambda.size()) expect_binary_search(std::nextafter(lambda[i], 1e9f));
+  }
+  for (int k = 0; k <= 20000; ++k)
+    expect_binary_search(std::min(lambda.front() + (lambda.back() - lambda.front()) * float(k) / 20000.f, lambda.back()));
+  EXPECT_FALSE(table.locate(std::nextafter(lambda.front(), 0.f)).has_value());
+  EXPECT_FALSE(table.locate(std::nextafter(lambda.back(), 1e9f)).has_value());
 }
 
 TEST(Spectrum, TabulatedIsZeroOutsideTheTable) {

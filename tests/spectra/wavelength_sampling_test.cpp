@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <vector>
 
@@ -128,6 +129,31 @@ TEST(WavelengthDistribution, MixtureIsADensityItsSamplesFollow) {
   ASSERT_GT(dof, 200);
   // P(chi2 > dof + 4 sqrt(2 dof)) < 1e-3 for dof in the hundreds.
   EXPECT_LT(chi2, dof + 4 * std::sqrt(2.0 * dof));
+}
+
+// sample() inverts the mixture's CDF: checked against a CDF the test sums from pdf()
+// at every bin edge in u, the floats beside it, and 10 000 points between.
+TEST(WavelengthDistribution, SampleInvertsTheMixturesCdf) {
+  const WavelengthDistribution d = eye_and_lamp();
+  const float w = WavelengthDistribution::kBinWidth;
+  const int bins = int(std::lround((kLambdaMax - kLambdaMin) / w));
+  std::vector<double> cdf{0.0};
+  for (int b = 0; b < bins; ++b) cdf.push_back(cdf.back() + double(d.pdf(kLambdaMin + w * (b + 0.5f))) * w);
+  const auto expected = [&](double u) {
+    const int b = std::clamp(int(std::upper_bound(cdf.begin(), cdf.end(), u) - cdf.begin()) - 1, 0, bins - 1);
+    return kLambdaMin + w * (b + float((u - cdf[b]) / (cdf[b + 1] - cdf[b])));
+  };
+  const auto check = [&](float u) {
+    if (!(u >= 0.f && u < 1.f)) return;
+    ASSERT_NEAR(d.sample(u, 1)[0], expected(u), 2e-3) << "u = " << u;
+  };
+  for (int b = 0; b < bins; ++b) {
+    const float edge = float(cdf[b]);
+    check(edge);
+    check(std::nextafter(edge, 0.f));
+    check(std::nextafter(edge, 1.f));
+  }
+  for (int k = 0; k < 10000; ++k) check(float(k) / 10000.f);
 }
 
 TEST(WavelengthDistribution, LanesAreStratifiedInTheMixturesCdf) {
