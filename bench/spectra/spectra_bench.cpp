@@ -1,5 +1,6 @@
-// Per-sample spectral costs: table lookups (evenly spaced: O(1) index; irregular:
-// binary search), drawing hero wavelengths, and the film's XYZ estimate for one path.
+// Per-sample spectral costs: table lookups (evenly spaced: O(1) index; irregular: a
+// guide table's index, walked), drawing hero wavelengths (the eye's closed form; a
+// scene's mixture through its guide table), and the film's XYZ estimate for one path.
 #include <benchmark/benchmark.h>
 
 #include <vector>
@@ -7,6 +8,7 @@
 #include "core/rng.h"
 #include "spectra/color.h"
 #include "spectra/library.h"
+#include "spectra/wavelength_sampling.h"
 
 using namespace chlorovdb;
 
@@ -35,6 +37,17 @@ void BM_SampleVisibleFourLanes(benchmark::State& state) {
   for (auto _ : state) benchmark::DoNotOptimize(SampledWavelengths::sample_visible(rng.uniform(), 4));
 }
 
+// A scene's camera-wavelength mixture: the eye's density, a lamp with mercury lines, a daylight.
+void BM_SampleMixtureFourLanes(benchmark::State& state) {
+  const Spectrum lamp = named_spectrum("F2"), daylight = named_spectrum("D65");
+  const WavelengthDistribution d = WavelengthDistribution::mixture(
+      {{[](float l) { return double(visible_wavelength_pdf(l)); }, 0.5},
+       {[&](float l) { return double(lamp(l)); }, 0.25},
+       {[&](float l) { return double(daylight(l)); }, 0.25}});
+  Rng rng(3, 0);
+  for (auto _ : state) benchmark::DoNotOptimize(d.sample(rng.uniform(), 4));
+}
+
 void BM_ToXyzFourLanes(benchmark::State& state) {
   const SampledSpectrum L(1.f);
   const std::vector<SampledWavelengths> sets = wavelength_sets();
@@ -47,4 +60,5 @@ void BM_ToXyzFourLanes(benchmark::State& state) {
 BENCHMARK(BM_LookupUniformStep);
 BENCHMARK(BM_LookupIrregularStep);
 BENCHMARK(BM_SampleVisibleFourLanes);
+BENCHMARK(BM_SampleMixtureFourLanes);
 BENCHMARK(BM_ToXyzFourLanes);
