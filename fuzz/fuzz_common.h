@@ -1,8 +1,8 @@
 #pragma once
-// Shared by the libFuzzer targets: a private scratch folder per process, one
-// thread per process, and the rule for what counts as a bug. An InputError is the parser doing its job;
-// any other exception escapes to abort() so libFuzzer records the input as a crash
-// (as it does for sanitizer reports, signals and time-outs).
+// Shared by the libFuzzer targets: a private scratch folder per process, one thread
+// per process, and the rule for what counts as a bug. An InputError is the parser
+// doing its job; any other exception escapes to abort() so libFuzzer records the
+// input as a crash (as it does for sanitizer reports, signals and time-outs).
 #include <cstdio>
 #include <cstdlib>
 #include <exception>
