@@ -7,6 +7,7 @@
 #include <fmt/format.h>
 
 #include <array>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstring>
@@ -81,7 +82,8 @@ int ply_type_size(const std::string& type) {
 // Assimp 5.2's PLY reader trusts the header: without an end_header line it reads
 // past its buffer (a crash: upstream assimp#4843, fixed after 5.2.5), and it allocates
 // what the header declares before reading any data (4294967295 vertices in a
-// 200-byte file asked for 48 GB). So a file starting with "ply" is checked first:
+// 200-byte file asked for 48 GB). So a file starting with "ply" in any case (the magic
+// Assimp's reader accepts, whatever the file's extension) is checked first:
 // every header line must be one the format defines, the header must end, and the
 // declared elements must fit in the bytes after it (binary: each instance takes its
 // scalar properties plus each list's count; ASCII: at least two bytes, a digit and
@@ -89,11 +91,16 @@ int ply_type_size(const std::string& type) {
 void check_ply_header(const std::filesystem::path& file, const std::string& name) {
   std::ifstream in(file, std::ios::binary);
   std::string line;
-  if (!std::getline(in, line) || line.rfind("ply", 0) != 0) return;  // not a PLY file
+  const auto lowercase = [](std::string s) {
+    for (char& c : s) c = char(std::tolower(static_cast<unsigned char>(c)));
+    return s;
+  };
+  if (!std::getline(in, line) || lowercase(line.substr(0, 3)) != "ply") return;  // not a PLY file
   const auto refuse = [&](int line_number, const std::string& problem) {
     return InputError(name, fmt::format("PLY header line {}", line_number), line.substr(0, 80), problem);
   };
-  if (line != "ply" && line != "ply\r") throw refuse(1, "the first line must be \"ply\"");
+  if (const std::string magic = lowercase(line); magic != "ply" && magic != "ply\r")
+    throw refuse(1, "the first line must be \"ply\"");
   struct Element {
     std::string name;
     uint64_t count = 0;

@@ -295,6 +295,9 @@ TEST(MeshLoad, MalformedPlyHeaderIsRefusedNamingTheLine) {
       {"ply\nformat ascii 1.0\nelement face 4\nproperty list uchar vertex_indices\nend_header\n", "line 4"},
       {"ply\nformat ascii 1.0\nelement vertex 4\nproperty quaternion x\nend_header\n", "line 4"},
       {"plyx\nformat ascii 1.0\n", "line 1"},
+      // Assimp takes the magic in any case: a fuzzer's hang (fuzz/crashes/mesh/ply-capitalised-magic-*).
+      {"Ply\nformat ascii 1.0\nentemel vertex 3\nproperty float x\n", "line 3"},
+      {"PLYx\nformat ascii 1.0\n", "line 1"},
   };
   for (const Case& c : cases) {
     const TempFile file("bad_header.ply", c.header + tail);
@@ -335,4 +338,6 @@ TEST(MeshLoad, PlyElementCountsBeyondTheFileAreRefused) {
   EXPECT_EQ(load_mesh(crlf.path()).triangle_count(), 1);
   const TempFile good("good.ply", binary_ply_tetrahedron(1.f));
   EXPECT_EQ(load_mesh(good.path()).triangle_count(), 4);
+  const TempFile upper("upper.ply", "PLY" + binary_ply_tetrahedron(1.f).substr(3));
+  EXPECT_EQ(load_mesh(upper.path()).triangle_count(), 4);
 }
