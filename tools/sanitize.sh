@@ -91,6 +91,13 @@ grep -E "tests passed|tests failed|Total Test time" "$log" || true
 if [ "$status" -ne 0 ]; then
   echo "-- failing tests:"
   sed -n '/The following tests FAILED/,$p' "$log" | tail -n +2
+  # A fuzz test's report sits in the middle of its long output, the part a CI log
+  # drops: repeat the first report and the reproducer here, at the end.
+  if grep -qE "ERROR: libFuzzer|ERROR: [A-Za-z]+Sanitizer|runtime error:" "$log"; then
+    echo "-- first report in the failing output:"
+    sed -n -E '/ERROR: libFuzzer|ERROR: [A-Za-z]+Sanitizer|runtime error:/,/^SUMMARY:/p' "$log" | head -n 50
+    grep -E "^reproducer |^Base64: " -A1 "$log" | cut -c1-2100 | head -n 8 || true
+  fi
 fi
 shopt -s nullglob
 reports=("$reports_dir"/report.*)
