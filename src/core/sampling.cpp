@@ -23,19 +23,12 @@ Distribution1D::Distribution1D(std::span<const float> weights) {
     cdf_[i + 1] = acc;
   }
   if (n) cdf_[n] = 1.f;
-}
-
-int Distribution1D::sample(float u, float* pmf, float* u_remapped) const {
-  // First index whose upper edge exceeds u; skip zero-probability bins.
-  const auto it = std::upper_bound(cdf_.begin() + 1, cdf_.end(), u);
-  int i = std::clamp(int(it - cdf_.begin()) - 1, 0, int(pdf_.size()) - 1);
-  while (pdf_[i] == 0.f && i > 0) --i;
-  if (pmf) *pmf = pdf_[i];
-  if (u_remapped) {
-    const double width = cdf_[i + 1] - cdf_[i];
-    *u_remapped = width > 0 ? std::min(float((u - cdf_[i]) / width), 0x1.fffffep-1f) : 0.f;
+  guide_.resize(n);
+  for (size_t k = 0, i = 0; k < n; ++k) {
+    const double u = double(k) / double(n);
+    while (i + 1 < n && cdf_[i + 1] <= u) ++i;
+    guide_[k] = uint32_t(i);
   }
-  return i;
 }
 
 }  // namespace chlorovdb

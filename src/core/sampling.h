@@ -1,8 +1,9 @@
 #pragma once
 // Warping functions as sample / pdf pairs (inputs u in [0,1)).
 #include <algorithm>
-#include <cmath>
 #include <array>
+#include <cmath>
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -80,7 +81,10 @@ inline float power_heuristic(int nf, float f_pdf, int ng, float g_pdf) {
 }
 
 // Discrete distribution over weights with a cumulative table (for lights,
-// triangles, and tabulated 1-D densities).
+// triangles, camera wavelengths and tabulated 1-D densities). sample() starts from
+// a guide table (the bin u = k / size falls in, one cell per bin) and walks to the
+// bin a binary search would find: O(1) on average, where the search was O(log n)
+// (the camera's 940 wavelength bins are drawn four times per camera sample).
 class Distribution1D {
  public:
   Distribution1D() = default;
@@ -89,13 +93,32 @@ class Distribution1D {
   int size() const { return int(pdf_.size()); }
   float total() const { return total_; }
   // Index i with probability pmf(i); `u_remapped` (optional) receives u rescaled to [0,1) inside the bin.
-  int sample(float u, float* pmf = nullptr, float* u_remapped = nullptr) const;
+  int sample(float u, float* pmf = nullptr, float* u_remapped = nullptr) const;  // inline: per camera sample
   float pmf(int i) const { return pdf_[i]; }
 
  private:
   std::vector<float> pdf_;
   std::vector<double> cdf_;  // double: with thousands of bins a float CDF's bin widths drift from pdf_
+  std::vector<uint32_t> guide_;  // guide_[k]: the bin u = k / size falls in
   float total_ = 0;
 };
+
+inline int Distribution1D::sample(float u, float* pmf, float* u_remapped) const {
+  // The first bin whose upper edge exceeds u (cdf[i] <= u < cdf[i+1], unique for a
+  // non-decreasing CDF), found from the guide's bin by walking both ways, so rounding
+  // in the cell index cannot matter; then skip zero-probability bins.
+  const int n = int(pdf_.size());
+  const double x = double(u) * double(n);
+  int i = int(guide_[x > 0 ? size_t(std::min(x, double(n - 1))) : 0]);
+  while (i > 0 && cdf_[size_t(i)] > u) --i;
+  while (i + 1 < n && cdf_[size_t(i) + 1] <= u) ++i;
+  while (pdf_[i] == 0.f && i > 0) --i;
+  if (pmf) *pmf = pdf_[i];
+  if (u_remapped) {
+    const double width = cdf_[i + 1] - cdf_[i];
+    *u_remapped = width > 0 ? std::min(float((u - cdf_[i]) / width), 0x1.fffffep-1f) : 0.f;
+  }
+  return i;
+}
 
 }  // namespace chlorovdb

@@ -112,48 +112,28 @@ WavelengthDistribution WavelengthDistribution::mixture(const std::vector<Compone
   }
   if (!(total_share > 0))
     throw std::invalid_argument("wavelength mixture: no component has weight over the camera range");
+  std::vector<float> weights(static_cast<size_t>(bins));
+  for (int b = 0; b < bins; ++b) weights[size_t(b)] = float(mix[size_t(b)] / total_share);
   WavelengthDistribution d;
-  d.density_.resize(size_t(bins));
-  d.cdf_.resize(size_t(bins) + 1);
-  double cdf = 0;
-  for (int b = 0; b < bins; ++b) {
-    const double p = mix[size_t(b)] / total_share;  // probability of bin b
-    d.density_[size_t(b)] = float(p / kBinWidth);
-    cdf += p;
-    d.cdf_[size_t(b) + 1] = cdf;
-  }
-  d.cdf_.back() = 1.0;
-  d.guide_.resize(size_t(bins));
-  for (int k = 0, b = 0; k < bins; ++k) {
-    const double u = double(k) / bins;
-    while (b + 1 < bins && d.cdf_[size_t(b) + 1] <= u) ++b;
-    d.guide_[size_t(k)] = uint32_t(b);
-  }
+  d.bins_ = Distribution1D(weights);
   return d;
 }
 
 float WavelengthDistribution::pdf(float lambda_nm) const {
   if (is_visible()) return visible_wavelength_pdf(lambda_nm);
   if (!(lambda_nm >= kLambdaMin && lambda_nm <= kLambdaMax)) return 0.f;
-  const int b = std::min(int((lambda_nm - kLambdaMin) / kBinWidth), int(density_.size()) - 1);
-  return density_[size_t(b)];
+  const int b = std::min(int((lambda_nm - kLambdaMin) / kBinWidth), bins_.size() - 1);
+  return bins_.pmf(b) / kBinWidth;
 }
 
 SampledWavelengths WavelengthDistribution::sample(float u, int count) const {
   if (is_visible()) return SampledWavelengths::sample_visible(u, count);
   check_count(count);
   float lambda[kMaxWavelengths], pdf[kMaxWavelengths];
-  const int bins = int(density_.size());
   for (int i = 0; i < count; ++i) {
-    const float ui = stratum(u, i, count);
-    // Bin b with cdf[b] <= ui < cdf[b+1]: a bin of probability 0 is never chosen. The
-    // guide's bin is corrected both ways, so rounding in the cell index cannot matter.
-    const double uid = double(ui);
-    int b = int(guide_[std::min(size_t(uid * bins), size_t(bins) - 1)]);
-    while (b > 0 && cdf_[size_t(b)] > uid) --b;
-    while (b + 1 < bins && cdf_[size_t(b) + 1] <= uid) ++b;
-    const double p = cdf_[size_t(b) + 1] - cdf_[size_t(b)];
-    const float x = p > 0 ? float(std::clamp((double(ui) - cdf_[size_t(b)]) / p, 0.0, 1.0)) : 0.5f;
+    // A bin of probability 0 is never chosen; x is the lane's position inside its bin.
+    float x = 0.f;
+    const int b = bins_.sample(stratum(u, i, count), nullptr, &x);
     lambda[i] = std::min(kLambdaMin + kBinWidth * (float(b) + x), kLambdaMax);
     pdf[i] = this->pdf(lambda[i]);  // the bin λ rounded into (at a bin's edge, the next one's)
   }

@@ -13,10 +13,10 @@
 // tabulated as a piecewise-constant density over [kLambdaMin, kLambdaMax]; lanes stay
 // stratified, in the mixture's CDF, and each lane carries its own pdf, which the film
 // divides by, so the image's expectation does not depend on the mixture.
-#include <cstdint>
 #include <functional>
 #include <vector>
 
+#include "core/sampling.h"
 #include "spectra/sampled.h"
 
 namespace chlorovdb {
@@ -44,18 +44,14 @@ class WavelengthDistribution {
   // negative or not finite somewhere, or no component has weight.
   static WavelengthDistribution mixture(const std::vector<Component>& components);
 
-  bool is_visible() const { return density_.empty(); }
+  bool is_visible() const { return bins_.empty(); }
   // Density in 1/nm; zero outside [kLambdaMin, kLambdaMax].
   float pdf(float lambda_nm) const;
   // `count` stratified lanes: lane i inverts the CDF at frac(u + i / count).
   SampledWavelengths sample(float u, int count) const;
 
  private:
-  std::vector<float> density_;  // per bin, 1/nm
-  std::vector<double> cdf_;     // bins + 1 entries, from 0 to 1
-  // guide_[k]: the bin u = k / bins falls in; sample() walks from there instead of
-  // searching the whole CDF.
-  std::vector<uint32_t> guide_;
+  Distribution1D bins_;  // probability of each kBinWidth bin; empty for the eye's importance
 };
 
 }  // namespace chlorovdb
