@@ -26,6 +26,7 @@
 #include "cli/stopping_options.h"
 #include "core/error.h"
 #include "integrator/continuation_guide_training.h"
+#include "integrator/excitation_photons.h"
 #include "io/image.h"
 #include "scene/scene_loader.h"
 #include "session/interrupt.h"
@@ -166,8 +167,12 @@ int render(const RenderArgs& a) {
   png.replace_extension(".png");
 
   if (root && scene.has_fluorescence())
-    fmt::print(stderr, "fluorescence: {} ({}){}\n", to_string(s.fluorescence), s.fluorescence_reason,
-               uses_continuation_guides(scene) ? "; continuation directions guided" : "");
+    fmt::print(stderr, "fluorescence: {} ({}){}{}\n", to_string(s.fluorescence), s.fluorescence_reason,
+               uses_continuation_guides(scene) ? "; continuation directions guided" : "",
+               uses_excitation_photons(scene)
+                   ? fmt::format("; excitation from {} photons per pigment on {} cells across (consistent, not unbiased)",
+                                 s.excitation_photons, s.excitation_grid_cells)
+                   : "");
   RenderOutcome r = [&] {
     InterruptScope interrupts;
     return run_render_session(scene, job);

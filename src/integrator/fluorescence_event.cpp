@@ -283,6 +283,14 @@ SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, 
     for (int i = 0; i < n; ++i)
       j[i] += q_weight * f[i] * fp.redistribution(lp, lambda[i]) * kInv4Pi / lambda[i] * absorbed;
   };
+  if (scene.settings.excitation_estimate == ExcitationEstimate::photons) {
+    // Every route's excitation, tallied by the lamps' photons: one lookup.
+    if (const ExcitationGrid* grid = scene.excitation_grid(medium, k))
+      if (const float* absorbed = grid->at(x))
+        for (int b = 0; b < ExcitationGrid::kBins; ++b)
+          add_emission(kAbsorptionPerMolarExtinction * c * absorbed[b], ExcitationGrid::bin_center(b));
+    return T * j / (ds.pdf * p_pigment);
+  }
   float lp = 0.f;
   const float direct = direct_excitation(scene, fp, x, medium, c, rng, stats, &lp);
   add_emission(direct, lp);

@@ -12,6 +12,7 @@
 
 #include "integrator/aov.h"
 #include "integrator/continuation_guide_training.h"
+#include "integrator/excitation_photons.h"
 #include "io/progress.h"
 
 namespace chlorovdb {
@@ -101,7 +102,10 @@ RenderStats render(const Scene& scene, Film& film, const RenderOptions& options)
   if (options.show_progress) progress = std::make_unique<Progress>(int64_t(tiles.size()) * (options.spp - options.samples_done), "render");
 
   // Learned from the scene before the first pass, once per scene; its time is part of the render's.
-  arena.execute([&] { prepare_continuation_guides(scene); });
+  arena.execute([&] {
+    prepare_continuation_guides(scene);
+    prepare_excitation_grids(scene);
+  });
 
   auto stopped = [&] { return options.stop && options.stop->load(std::memory_order_relaxed); };
   int done = options.samples_done;

@@ -9,6 +9,7 @@
 #include "camera/camera.h"
 #include "film/film.h"
 #include "fluorescence/continuation_guide.h"
+#include "fluorescence/excitation_grid.h"
 #include "fluorescence/fluorescent_pigment.h"
 #include "geometry/geometry_scene.h"
 #include "lights/light.h"
@@ -55,6 +56,13 @@ enum class DirectLightThroughGlass { connect, block };
 // uniform (guided; measured no better on the default scene, kept to measure:
 // docs/fluorescence.md, "Guided continuations").
 enum class ContinuationDirections { uniform, guided };
+// Where a fluorescence event's absorbed excitation comes from:
+//  rays    — excitation rays (and continuations in full mode) from the event: unbiased;
+//  photons — a grid tallied before the render by photons traced from the lamps
+//            (integrator/excitation_photons.h): every route at one lookup per event,
+//            consistent (biased by the grid's cells and photon count). Counts
+//            every route, the pigment's own re-emission included, in `direct` mode too.
+enum class ExcitationEstimate { rays, photons };
 // Camera wavelengths: from a mixture of the eye's importance with the scene's
 // light spectra and the pigments' re-emission (scene), or from the eye's
 // importance alone (visible; lamps with line spectra then make fireflies).
@@ -82,6 +90,9 @@ struct RenderSettings {
   ExcitationThroughGlass excitation_through_glass = ExcitationThroughGlass::connect;
   DirectLightThroughGlass direct_light_through_glass = DirectLightThroughGlass::connect;
   ContinuationDirections continuation_directions = ContinuationDirections::uniform;
+  ExcitationEstimate excitation_estimate = ExcitationEstimate::rays;
+  int64_t excitation_photons = 1 << 20;  // per fluorescent pigment and medium
+  int excitation_grid_cells = 32;        // along the medium's longest axis
   CameraWavelengths camera_wavelengths = CameraWavelengths::scene;
   // Both kept to measure what the defaults buy (docs/fluorescence.md); neither
   // applies to the `reference` estimator, which always draws λ' uniformly below
@@ -136,6 +147,9 @@ struct Scene {
   // itself, so the first render() trains them (integrator/continuation_guide_training.h)
   // and later renders reuse them; null, or an empty guide: uniform directions.
   mutable std::shared_ptr<const std::vector<ContinuationGuide>> continuation_guides;
+  // Photon grids per medium and pigment (render.excitation_estimate = photons),
+  // traced by the first render() (integrator/excitation_photons.h).
+  mutable std::shared_ptr<const std::vector<std::vector<ExcitationGrid>>> excitation_grids;
   int camera_medium = -1;
   std::vector<Sensor> sensors;  // by name
   std::vector<std::string> warnings;  // loader's doubts about the scene (e.g. a grid's length unit); printed by render
@@ -160,6 +174,12 @@ struct Scene {
     }
   }
 
+  const ExcitationGrid* excitation_grid(int medium, int pigment) const {
+    if (!excitation_grids || medium < 0 || size_t(medium) >= excitation_grids->size()) return nullptr;
+    const auto& grids = (*excitation_grids)[size_t(medium)];
+    if (pigment < 0 || size_t(pigment) >= grids.size() || grids[size_t(pigment)].empty()) return nullptr;
+    return &grids[size_t(pigment)];
+  }
   const ContinuationGuide* continuation_guide(int medium) const {
     if (!continuation_guides || medium < 0 || size_t(medium) >= continuation_guides->size()) return nullptr;
     const ContinuationGuide& g = (*continuation_guides)[size_t(medium)];

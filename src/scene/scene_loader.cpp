@@ -109,6 +109,11 @@ RenderSettings read_render_settings(ParamReader& top, const SceneOverrides& o, s
         r->get_enum("continuation_directions", "uniform", {"uniform", "guided"}) == "guided"
             ? ContinuationDirections::guided
             : ContinuationDirections::uniform;
+    s.excitation_estimate = r->get_enum("excitation_estimate", "rays", {"rays", "photons"}) == "photons"
+                                ? ExcitationEstimate::photons
+                                : ExcitationEstimate::rays;
+    s.excitation_photons = r->get_int("excitation_photons", int(s.excitation_photons), 1, 1 << 30);
+    s.excitation_grid_cells = r->get_int("excitation_grid_cells", s.excitation_grid_cells, 1, 64);
     s.camera_wavelengths = r->get_enum("camera_wavelengths", "scene", {"scene", "visible"}) == "visible"
                                ? CameraWavelengths::visible
                                : CameraWavelengths::scene;

@@ -1,6 +1,8 @@
-// docs/physics.md §7: the analytic slab, photon balance, Q = 0, direct vs full.
+// docs/physics.md §7: the analytic slab, photon balance, Q = 0, direct vs full, photon tallies.
 #include <gtest/gtest.h>
 
+#include "core/error.h"
+#include "integrator/excitation_photons.h"
 #include "media/pigment.h"
 #include "spectra/library.h"
 #include "test_scenes.h"
@@ -326,4 +328,139 @@ TEST(FluorescenceSlab, ReferenceEstimatorExcitesThroughGlass) {
   const Estimate blocked =
       fluorescence_sum(in_glass(R"(, "excitation_through_glass": "block")", "slab_reference_glass_block"));
   EXPECT_EQ(blocked.sum, 0.0);
+}
+
+// render.excitation_estimate = photons (integrator/excitation_photons.h).
+namespace {
+
+// ∫ over [lo, hi) of λ'·ε(λ')·E(λ')·∫_{d0}^{d1} Φ(d) dd dλ' for a collimated beam at
+// normal incidence: the tally over the depths [d0, d1] below the slab's lit face.
+// μ is the pigment's and the solvent's absorption; R the reflectance of each face
+// (0 index-matched), so the fluence is the down- and up-going beams of
+// Φ(d) = (1−R)(e^{-μd} + R e^{-μ(2D−d)}) / (1 − R² e^{-2μD}).
+double beam_tally(const SlabTruth& truth, const Spectrum& E, double lo, double hi, double d0, double d1,
+                  double R = 0.0) {
+  const FluorescentPigment& fp = truth.scene.fluorescence[0][0];
+  const double D = truth.setup.D, step = 0.02;
+  double sum = 0;
+  for (double lp = lo + 0.5 * step; lp < hi; lp += step) {
+    const double mu = truth.mu_pigment(lp) + truth.solvent_absorption;
+    if (!(mu > 0)) continue;
+    const double down = (std::exp(-mu * d0) - std::exp(-mu * d1)) / mu;
+    const double up = R * std::exp(-2 * mu * D) * (std::exp(mu * d1) - std::exp(mu * d0)) / mu;
+    const double fluence = (1 - R) * (down + up) / (1 - R * R * std::exp(-2 * mu * D));
+    sum += lp * fp.epsilon(float(lp)) * E(float(lp)) * fluence * step;
+  }
+  return sum;
+}
+// The beam comes down from +z: the slab's lit face is z = D.
+constexpr double kSolvent = 30.0;  // 1/m: the emission is attenuated too, so the two faces differ
+
+}  // namespace
+
+TEST(ExcitationPhotons, SettingsAreReadAndChecked) {
+  SlabSetup s;
+  EXPECT_EQ(slab_scene(s, "slab_photons_default", 0.0).settings.excitation_estimate, ExcitationEstimate::rays);
+  s.render_extra = R"(, "excitation_estimate": "photons", "excitation_photons": 5000, "excitation_grid_cells": 12)";
+  const Scene photons = slab_scene(s, "slab_photons_set", 0.0);
+  EXPECT_EQ(photons.settings.excitation_estimate, ExcitationEstimate::photons);
+  EXPECT_EQ(photons.settings.excitation_photons, 5000);
+  EXPECT_EQ(photons.settings.excitation_grid_cells, 12);
+  for (const char* bad : {R"(, "excitation_estimate": "photon")", R"(, "excitation_photons": 0)",
+                          R"(, "excitation_grid_cells": 65)"}) {
+    s.render_extra = bad;
+    EXPECT_THROW(slab_scene(s, "slab_photons_bad", 0.0), InputError) << bad;
+  }
+}
+
+// Photons under a collimated beam into a slab: every depth layer's tally, pooled over
+// the cells away from the slab's edges, is the beam's (beam_tally) over the cell's
+// height, within 4σ of the mean of those cells (their spread is the photons' noise).
+// Index-matched, and as a liquid of index 1.33 whose faces reflect: the photons'
+// power crosses a refraction uncompressed (radiance would be scaled by 1/η²).
+namespace {
+
+void check_slab_tally(bool refracting) {
+  SlabSetup s;
+  s.render_extra = R"(, "excitation_estimate": "photons")";
+  std::string json = slab_scene_json(s);
+  json.replace(json.find("\"solvent\": \"none\""), 17, "\"solvent\": {\"absorption\": 30, \"rayleigh\": false}");
+  if (refracting) json.replace(json.find("{\"type\": \"interface\"}"), 21, "{\"type\": \"dielectric\", \"ior\": 1.33}");
+  const Scene scene = load_scene(write_scene(refracting ? "slab_photons_tally_n133" : "slab_photons_tally", json));
+  const double R = refracting ? std::pow(0.33 / 2.33, 2) : 0.0;
+  PhotonTracing tracing;
+  tracing.photons = 1 << 18;
+  tracing.cells_per_axis = 16;
+  const auto grids = trace_excitation_photons(scene, tracing);
+  ASSERT_EQ(grids.size(), 1u);
+  ASSERT_EQ(grids[0].size(), 1u);
+  const ExcitationGrid& g = grids[0][0];
+  ASSERT_FALSE(g.empty());
+  const SlabTruth truth{scene, s, kSolvent};
+  const Spectrum& E = emission_spectrum(scene.lights[0]);
+  const auto n = g.cells();
+  ASSERT_GE(n[2], 8) << "a thin layer gets at least 8 cells across";
+  const Vec3 lo = g.region().lo, size = g.region().diagonal();
+  for (int iz = 0; iz < n[2]; ++iz) {
+    const double c0 = lo.z + size.z * iz / n[2], c1 = lo.z + size.z * (iz + 1) / n[2];
+    // The grid's region reaches past the slab: a cell astride its face averages over
+    // the part inside the liquid only.
+    const double in0 = std::max(0.0, c0), in1 = std::min(s.D, c1);
+    const double exact =
+        in1 > in0 ? beam_tally(truth, E, s.eps_lo - 1, s.eps_hi + 1, s.D - in1, s.D - in0, R) / (in1 - in0) : 0.0;
+    Estimate pooled;
+    for (int iy = 1; iy + 1 < n[1]; ++iy)
+      for (int ix = 1; ix + 1 < n[0]; ++ix) {
+        const float* v = g.at(lo + Vec3{(ix + 0.5f) * size.x / n[0], (iy + 0.5f) * size.y / n[1], float(0.5 * (c0 + c1) - lo.z)});
+        ASSERT_NE(v, nullptr);
+        double sum = 0;
+        for (int b = 0; b < ExcitationGrid::kBins; ++b) sum += v[b];
+        pooled.add(sum);
+      }
+    if (exact == 0.0) {
+      EXPECT_EQ(pooled.mean(), 0.0) << "layer " << iz << " lies outside the slab";
+      continue;
+    }
+    EXPECT_NEAR(pooled.mean(), exact, 4 * pooled.sigma())
+        << (refracting ? "n = 1.33, " : "") << "layer " << iz << ": rel.err " << pooled.mean() / exact - 1
+        << " (σ/mean " << pooled.sigma() / exact << ")";
+  }
+}
+
+}  // namespace
+
+TEST(ExcitationPhotons, SlabTallyIsTheCollimatedBeamsFluence) { check_slab_tally(false); }
+TEST(ExcitationPhotons, SlabTallyInARefractingLiquidCountsBothFacesReflections) { check_slab_tally(true); }
+
+// The event side alone: a grid holding the exact tally (256 layers, so the fluence's
+// fall over a layer is negligible) gives the analytic slab's radiance.
+TEST(ExcitationPhotons, EventsReadingTheExactTallyGiveTheSlabsRadiance) {
+  SlabSetup s;
+  s.render_extra = R"(, "excitation_estimate": "photons")";
+  const Scene scene = slab_scene(s, "slab_photons_event", kSolvent);
+  const SlabTruth truth{scene, s, kSolvent};
+  const Spectrum& E = emission_spectrum(scene.lights[0]);
+  constexpr int kLayers = 256;
+  ExcitationGrid g(Bounds3{{-10, -10, 0}, {10, 10, float(s.D)}}, {1, 1, kLayers});
+  for (int iz = 0; iz < kLayers; ++iz) {
+    const double z0 = s.D * iz / kLayers, z1 = s.D * (iz + 1) / kLayers;
+    for (int b = 0; b < ExcitationGrid::kBins; ++b) {
+      const double half = 0.5 * (ExcitationGrid::bin_center(1) - ExcitationGrid::bin_center(0));
+      const double c = ExcitationGrid::bin_center(b);
+      const double value = beam_tally(truth, E, c - half, c + half, s.D - z1, s.D - z0) / (z1 - z0);
+      // A vertical segment through the layer leaves value_per_length × its height.
+      g.deposit({0, 0, float(z0)}, {0, 0, float(z1)}, b, float(value / (z1 - z0)));
+    }
+  }
+  scene.excitation_grids =
+      std::make_shared<const std::vector<std::vector<ExcitationGrid>>>(1, std::vector<ExcitationGrid>{g});
+  for (const bool reflection_side : {true, false}) {
+    const Ray ray = reflection_side ? Ray{{0, 0, 1}, {0, 0, -1}} : Ray{{0, 0, -1}, {0, 0, 1}};
+    const auto e = measure(scene, ray, 20000, 29);
+    for (int k = 0; k < 4; ++k) {
+      const double exact = truth.radiance(kEmissionLambdas[k], reflection_side);
+      EXPECT_NEAR(e[k].mean(), exact, 4 * e[k].sigma() + 1e-4 * exact)
+          << "λ=" << kEmissionLambdas[k] << " rel.err " << (e[k].mean() / exact - 1);
+    }
+  }
 }

@@ -1,0 +1,62 @@
+#pragma once
+// The pigment's absorbed excitation, tallied by photons traced from the lamps
+// (integrator/excitation_photons.h) on a coarse grid over a fluorescent medium:
+// per cell and per excitation-wavelength bin,
+//   value = (1/V) Σ_photons flux · ℓ · λ' · ε(λ'),
+// the track-length estimate of ∫_bin λ'·ε(λ')·Φ(λ') dλ' averaged over the part of
+// the cell the medium fills (V: that volume, measured by lines cast through the
+// cells, so a cell astride the vessel's wall is not diluted by the glass or air
+// in it; Φ the fluence, W/(m²·nm)). A fluorescence event at x with concentration c
+// then reads its absorbed "λ'·μ_a·Φ" as k·c(x)·value (k = ln 10 · 100, the
+// molar-extinction conversion), the fluence taken constant over the cell: the
+// estimate's bias, which shrinks with the cell (consistent, not unbiased).
+#include <array>
+#include <vector>
+
+#include "core/constants.h"
+#include "core/vec.h"
+#include "spectra/sampled.h"
+
+namespace chlorovdb {
+
+class ExcitationGrid {
+ public:
+  // Excitation-wavelength bins over [kLambdaMinUV, kLambdaMax]: the emission's
+  // redistribution r(λ', λ) is evaluated at each bin's centre.
+  static constexpr int kBins = 32;
+  static int bin_of(float lambda_nm);
+  static float bin_center(int bin);
+
+  ExcitationGrid() = default;
+  ExcitationGrid(const Bounds3& region, const std::array<int, 3>& cells);
+
+  bool empty() const { return values_.empty(); }
+  const Bounds3& region() const { return region_; }
+  const std::array<int, 3>& cells() const { return n_; }
+
+  // Adds value_per_length × (the length of segment a→b inside each cell) to `bin`.
+  void deposit(const Vec3& a, const Vec3& b, int bin, float value_per_length);
+  // Adds the volume a line segment a→b inside the medium stands for: its length in
+  // each cell times the cross-section each such line represents, m².
+  void add_medium_volume(const Vec3& a, const Vec3& b, float cross_section);
+  // Element-wise sum of the tallies (per-chunk grids into one).
+  void add(const ExcitationGrid& other);
+  // Tallies to values: divided by `photons` and by the medium's volume in each cell
+  // (the whole cell's where no medium volume was measured).
+  void normalize(double photons);
+  // The kBins values of the cell holding x; nullptr outside the region.
+  const float* at(const Vec3& x) const;
+  float cell_volume() const { return cell_size_.x * cell_size_.y * cell_size_.z; }
+
+ private:
+  int cell_index(int ix, int iy, int iz) const { return (iz * n_[1] + iy) * n_[0] + ix; }
+  Bounds3 region_;
+  std::array<int, 3> n_{};
+  Vec3 cell_size_;
+  template <typename F>
+  void for_each_cell(const Vec3& a, const Vec3& b, F add_length) const;
+  std::vector<float> values_;         // cells × kBins
+  std::vector<float> medium_volume_;  // per cell, m³
+};
+
+}  // namespace chlorovdb
