@@ -169,7 +169,8 @@ void measure_medium_volume(const Scene& scene, int medium, ExcitationGrid& grid,
     }
 }
 
-ExcitationGrid trace_pigment(const Scene& scene, int medium, int k, const PhotonTracing& tracing) {
+ExcitationGrid trace_pigment(const Scene& scene, int medium, int k, const PhotonTracing& tracing,
+                             const std::atomic<bool>* stop) {
   const FluorescentPigment& fp = scene.fluorescence[size_t(medium)][size_t(k)];
   Bounds3 region = medium_region(scene, medium);
   if (region.empty() || !fp.excitation_possible() || tracing.photons < 1) return {};
@@ -189,8 +190,10 @@ ExcitationGrid trace_pigment(const Scene& scene, int medium, int k, const Photon
     const int64_t first = tracing.photons * chunk / kChunks, last = tracing.photons * (chunk + 1) / kChunks;
     const uint64_t stream = hash_combine(hash_combine(uint64_t(medium), uint64_t(k)), uint64_t(chunk));
     Rng rng(hash_combine(tracing.seed, stream), mix_bits(tracing.seed));
-    for (int64_t i = first; i < last; ++i)
+    for (int64_t i = first; i < last; ++i) {
+      if (stop && (i & 4095) == 0 && stop->load(std::memory_order_relaxed)) return;
       trace_photon(scene, medium, fp, emission, tracing, chunks[size_t(chunk)], rng);
+    }
   });
   ExcitationGrid grid = std::move(chunks[0]);
   for (int c = 1; c < kChunks; ++c) grid.add(chunks[size_t(c)]);
@@ -202,11 +205,14 @@ ExcitationGrid trace_pigment(const Scene& scene, int medium, int k, const Photon
 
 }  // namespace
 
-std::vector<std::vector<ExcitationGrid>> trace_excitation_photons(const Scene& scene, const PhotonTracing& tracing) {
+std::optional<std::vector<std::vector<ExcitationGrid>>> trace_excitation_photons(const Scene& scene,
+                                                                                const PhotonTracing& tracing,
+                                                                                const std::atomic<bool>* stop) {
   std::vector<std::vector<ExcitationGrid>> grids(scene.media.size());
   for (size_t m = 0; m < scene.media.size(); ++m)
     for (size_t k = 0; k < scene.fluorescence[m].size(); ++k)
-      grids[m].push_back(trace_pigment(scene, int(m), int(k), tracing));
+      grids[m].push_back(trace_pigment(scene, int(m), int(k), tracing, stop));
+  if (stop && stop->load(std::memory_order_relaxed)) return std::nullopt;
   return grids;
 }
 
@@ -217,7 +223,7 @@ bool uses_excitation_photons(const Scene& scene) {
          scene.has_fluorescence();
 }
 
-double prepare_excitation_grids(const Scene& scene) {
+double prepare_excitation_grids(const Scene& scene, const std::atomic<bool>* stop) {
   static std::mutex mutex;
   const std::lock_guard<std::mutex> lock(mutex);
   if (scene.excitation_grids || !uses_excitation_photons(scene)) return 0.0;
@@ -225,8 +231,8 @@ double prepare_excitation_grids(const Scene& scene) {
   PhotonTracing tracing;
   tracing.photons = scene.settings.excitation_photons;
   tracing.cells_per_axis = scene.settings.excitation_grid_cells;
-  scene.excitation_grids =
-      std::make_shared<const std::vector<std::vector<ExcitationGrid>>>(trace_excitation_photons(scene, tracing));
+  if (auto grids = trace_excitation_photons(scene, tracing, stop))
+    scene.excitation_grids = std::make_shared<const std::vector<std::vector<ExcitationGrid>>>(std::move(*grids));
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 

@@ -15,7 +15,9 @@
 //
 // Deterministic: fixed chunks of photons, each with its own random stream and
 // grid, summed in order, so a render depends on its seed and samples only.
+#include <atomic>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "fluorescence/excitation_grid.h"
@@ -32,13 +34,16 @@ struct PhotonTracing {
 
 // One grid per pigment (in FluorescentPigment order) per medium; empty where
 // nothing fluoresces, no shape encloses the medium or no light excites it.
-std::vector<std::vector<ExcitationGrid>> trace_excitation_photons(const Scene& scene, const PhotonTracing& tracing);
+// `stop` (Ctrl-C) abandons the tracing: nullopt.
+std::optional<std::vector<std::vector<ExcitationGrid>>> trace_excitation_photons(
+    const Scene& scene, const PhotonTracing& tracing, const std::atomic<bool>* stop = nullptr);
 
 // Whether a render of this scene reads excitation from photon grids.
 bool uses_excitation_photons(const Scene& scene);
 
 // render() calls this first: traces scene.excitation_grids once (thread-safe)
 // when uses_excitation_photons, and returns the seconds it took (0 if already done).
-double prepare_excitation_grids(const Scene& scene);
+// Stopped by `stop`, it leaves no grids (the render then stops before its first pass).
+double prepare_excitation_grids(const Scene& scene, const std::atomic<bool>* stop = nullptr);
 
 }  // namespace chlorovdb

@@ -392,9 +392,10 @@ void check_slab_tally(bool refracting) {
   tracing.photons = 1 << 18;
   tracing.cells_per_axis = 16;
   const auto grids = trace_excitation_photons(scene, tracing);
-  ASSERT_EQ(grids.size(), 1u);
-  ASSERT_EQ(grids[0].size(), 1u);
-  const ExcitationGrid& g = grids[0][0];
+  ASSERT_TRUE(grids);
+  ASSERT_EQ(grids->size(), 1u);
+  ASSERT_EQ((*grids)[0].size(), 1u);
+  const ExcitationGrid& g = (*grids)[0][0];
   ASSERT_FALSE(g.empty());
   const SlabTruth truth{scene, s, kSolvent};
   const Spectrum& E = emission_spectrum(scene.lights[0]);
@@ -463,4 +464,19 @@ TEST(ExcitationPhotons, EventsReadingTheExactTallyGiveTheSlabsRadiance) {
           << "λ=" << kEmissionLambdas[k] << " rel.err " << (e[k].mean() / exact - 1);
     }
   }
+}
+
+// Ctrl-C during the photon pre-pass: no grids are kept, so the render stops before
+// its first pass (nothing written) and a later render traces them afresh.
+TEST(ExcitationPhotons, AStopDuringThePrePassLeavesNoGrids) {
+  SlabSetup s;
+  s.render_extra = R"(, "excitation_estimate": "photons")";
+  const Scene scene = slab_scene(s, "slab_photons_stop", 0.0);
+  const std::atomic<bool> stop{true};
+  EXPECT_FALSE(trace_excitation_photons(scene, PhotonTracing{}, &stop));
+  prepare_excitation_grids(scene, &stop);
+  EXPECT_FALSE(scene.excitation_grids);
+  prepare_excitation_grids(scene);
+  ASSERT_TRUE(scene.excitation_grids);
+  EXPECT_NE(scene.excitation_grid(0, 0), nullptr);
 }
