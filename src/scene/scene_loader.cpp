@@ -1,5 +1,6 @@
 #include "scene/scene_loader.h"
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 #include <map>
@@ -657,6 +658,19 @@ Scene load_scene(const nlohmann::json& json, const std::filesystem::path& file, 
                         : light_power(light, scene.geometry, kLambdaMin, kLambdaMax));
   scene.light_sampler = LightSampler(relative_weights(power));
   setup_fluorescence(scene, fluorescence_mode);
+  // The photon grid is laid over the shapes that hold a fluorescent medium: one no
+  // shape encloses (the room's air) would get no grid and silently no fluorescence.
+  if (scene.settings.excitation_estimate == ExcitationEstimate::photons)
+    for (size_t m = 0; m < scene.media.size(); ++m) {
+      if (scene.fluorescence[m].empty()) continue;
+      const bool enclosed = std::any_of(scene.shapes.begin(), scene.shapes.end(),
+                                        [&](const ShapeBinding& b) { return b.medium_inside == int(m); });
+      if (!enclosed)
+        throw InputError(file.string(), "render.excitation_estimate", "photons",
+                         fmt::format("medium \"{}\" fluoresces but no shape encloses it, and the photon grid is laid "
+                                     "over the shapes that do: give it a shape or use \"rays\"",
+                                     scene.medium_names[m]));
+    }
   scene.camera_wavelengths = camera_wavelength_distribution(scene);
   scene.resolve_medium_policies();
   return scene;

@@ -371,6 +371,19 @@ TEST(ExcitationPhotons, SettingsAreReadAndChecked) {
     s.render_extra = bad;
     EXPECT_THROW(slab_scene(s, "slab_photons_bad", 0.0), InputError) << bad;
   }
+  // A fluorescent medium no shape encloses (here the camera's) would get no grid.
+  s.render_extra = R"(, "excitation_estimate": "photons")";
+  std::string json = slab_scene_json(s);
+  const std::string inside = ", \"inside\": \"solution\"";
+  json.replace(json.find(inside), inside.size(), "");
+  json.replace(json.find("\"lights\""), 0, "\"camera_medium\": \"solution\", ");
+  try {
+    load_scene(write_scene("slab_photons_unbounded", json));
+    ADD_FAILURE() << "an unbounded fluorescent medium was accepted with photons";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("render.excitation_estimate"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("no shape encloses"), std::string::npos) << e.what();
+  }
 }
 
 // Photons under a collimated beam into a slab: every depth layer's tally, pooled over
