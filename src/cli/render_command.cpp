@@ -170,8 +170,8 @@ int render(const RenderArgs& a) {
     fmt::print(stderr, "fluorescence: {} ({}){}{}\n", to_string(s.fluorescence), s.fluorescence_reason,
                uses_continuation_guides(scene) ? "; continuation directions guided" : "",
                uses_excitation_photons(scene)
-                   ? fmt::format("; excitation from {} photons per pigment on {} cells across (consistent, not unbiased)",
-                                 s.excitation_photons, s.excitation_grid_cells)
+                   ? fmt::format("; excitation from photons ({}; consistent, not unbiased)",
+                                 describe_excitation_photons(s))
                    : "");
   RenderOutcome r = [&] {
     InterruptScope interrupts;

@@ -1,5 +1,6 @@
 #include "integrator/excitation_photons.h"
 
+#include <fmt/format.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -30,7 +31,7 @@ constexpr float kFarAway = 1e6f;
 // `emission`, isotropic) and goes on: the pigment's own fluorescence excites it
 // too where emission and absorption overlap (chlorophyll's red band).
 void trace_photon(const Scene& scene, int medium, const FluorescentPigment& fp, const ExcitationSampler& emission,
-                  const PhotonTracing& tracing, ExcitationGrid& grid, Rng& rng) {
+                  const EmissionTarget& target, const PhotonTracing& tracing, ExcitationGrid& grid, Rng& rng) {
   const auto pick = fp.light_sampler.sample(rng.uniform());
   if (!pick) return;
   const ExcitationSampler& es = fp.excitation[size_t(fp.slot_of_light(pick->index))];
@@ -40,7 +41,8 @@ void trace_photon(const Scene& scene, int medium, const FluorescentPigment& fp, 
   const float eps = fp.epsilon(lp);
   if (!(pdf_lambda > 0.f) || !(eps > 0.f)) return;
   const Point2 u_position{rng.uniform(), rng.uniform()}, u_direction{rng.uniform(), rng.uniform()};
-  const auto emitted = sample_emission(scene.lights[size_t(pick->index)], u_position, u_direction, lp, scene.geometry);
+  const auto emitted = sample_emission(scene.lights[size_t(pick->index)], u_position, u_direction, lp, scene.geometry,
+                                       &target, rng.uniform());
   if (!emitted) return;
   // Power carried, W: the light's flux sample over the choice of light and λ'.
   float w = emitted->flux / (pick->pmf * pdf_lambda);
@@ -186,13 +188,14 @@ ExcitationGrid trace_pigment(const Scene& scene, int medium, int k, const Photon
   std::vector<ExcitationGrid> chunks(kChunks, ExcitationGrid(region, cells));
   // Re-emitted wavelengths: ∝ the emission spectrum (times λ; the weight corrects for it).
   const ExcitationSampler emission(fp.emission, Spectrum::constant(1.f));
+  const EmissionTarget target{region.center(), 0.5f * length(region.diagonal()), tracing.aimed_share};
   tbb::parallel_for(0, kChunks, [&](int chunk) {
     const int64_t first = tracing.photons * chunk / kChunks, last = tracing.photons * (chunk + 1) / kChunks;
     const uint64_t stream = hash_combine(hash_combine(uint64_t(medium), uint64_t(k)), uint64_t(chunk));
     Rng rng(hash_combine(tracing.seed, stream), mix_bits(tracing.seed));
     for (int64_t i = first; i < last; ++i) {
       if (stop && (i & 4095) == 0 && stop->load(std::memory_order_relaxed)) return;
-      trace_photon(scene, medium, fp, emission, tracing, chunks[size_t(chunk)], rng);
+      trace_photon(scene, medium, fp, emission, target, tracing, chunks[size_t(chunk)], rng);
     }
   });
   ExcitationGrid grid = std::move(chunks[0]);
@@ -216,6 +219,11 @@ std::optional<std::vector<std::vector<ExcitationGrid>>> trace_excitation_photons
   return grids;
 }
 
+std::string describe_excitation_photons(const RenderSettings& s) {
+  return fmt::format("{} photons per pigment, {:g}% aimed, {} cells", s.excitation_photons,
+                     100.f * s.excitation_photons_aimed, s.excitation_grid_cells);
+}
+
 bool uses_excitation_photons(const Scene& scene) {
   return scene.settings.excitation_estimate == ExcitationEstimate::photons &&
          (scene.settings.fluorescence == FluorescenceMode::direct ||
@@ -223,7 +231,7 @@ bool uses_excitation_photons(const Scene& scene) {
          scene.has_fluorescence();
 }
 
-double prepare_excitation_grids(const Scene& scene, const std::atomic<bool>* stop) {
+double prepare_excitation_grids(const Scene& scene, uint64_t seed, const std::atomic<bool>* stop) {
   static std::mutex mutex;
   const std::lock_guard<std::mutex> lock(mutex);
   if (scene.excitation_grids || !uses_excitation_photons(scene)) return 0.0;
@@ -231,6 +239,8 @@ double prepare_excitation_grids(const Scene& scene, const std::atomic<bool>* sto
   PhotonTracing tracing;
   tracing.photons = scene.settings.excitation_photons;
   tracing.cells_per_axis = scene.settings.excitation_grid_cells;
+  tracing.aimed_share = scene.settings.excitation_photons_aimed;
+  tracing.seed = hash_combine(tracing.seed, seed);
   if (auto grids = trace_excitation_photons(scene, tracing, stop))
     scene.excitation_grids = std::make_shared<const std::vector<std::vector<ExcitationGrid>>>(std::move(*grids));
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -1,7 +1,8 @@
 #pragma once
 // Light-traced excitation (render.excitation_estimate = photons): before the
 // render, photons leave the lamps at excitation wavelengths λ' ∝ S·ε·λ' (each
-// pigment's own light list and excitation samplers), cross glass by its BSDF,
+// pigment's own light list and excitation samplers; a share of them aimed at the
+// medium's bounding sphere, lights/light_emission.h), cross glass by its BSDF,
 // scatter and bounce off surfaces, and are tracked through media by delta
 // tracking; in a fluorescent medium every flight adds its track length to that
 // pigment's ExcitationGrid (fluorescence/excitation_grid.h), and a photon the
@@ -18,6 +19,7 @@
 #include <atomic>
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "fluorescence/excitation_grid.h"
@@ -26,10 +28,13 @@
 namespace chlorovdb {
 
 struct PhotonTracing {
-  int64_t photons = 1 << 20;  // per fluorescent pigment of each medium
+  int64_t photons = 1 << 18;  // per fluorescent pigment of each medium
   int cells_per_axis = 32;    // along the medium's longest axis
   int max_bounces = 64;
-  uint64_t seed = 0x70686f746f6e73ULL;
+  // Share of each light's photons aimed at the medium's bounding sphere
+  // (lights/light_emission.h EmissionTarget); the rest follow the light's own density.
+  float aimed_share = 0.5f;
+  uint64_t seed = 0x70686f746f6e73ULL;  // prepare_excitation_grids mixes in the render's
 };
 
 // One grid per pigment (in FluorescentPigment order) per medium; empty where
@@ -38,12 +43,19 @@ struct PhotonTracing {
 std::optional<std::vector<std::vector<ExcitationGrid>>> trace_excitation_photons(
     const Scene& scene, const PhotonTracing& tracing, const std::atomic<bool>* stop = nullptr);
 
+// The photon settings in a line, for the log, the output's metadata and the
+// checkpoint's signature: "262144 photons per pigment, 50% aimed, 32 cells".
+std::string describe_excitation_photons(const RenderSettings& settings);
+
 // Whether a render of this scene reads excitation from photon grids.
 bool uses_excitation_photons(const Scene& scene);
 
 // render() calls this first: traces scene.excitation_grids once (thread-safe)
 // when uses_excitation_photons, and returns the seconds it took (0 if already done).
+// The photons' streams come from the render's seed, so renders with different seeds
+// have independent grids (their average converges; the grid's noise is part of each
+// render's variance), and the parts of one render (crops, ranks, resumes) share one.
 // Stopped by `stop`, it leaves no grids (the render then stops before its first pass).
-double prepare_excitation_grids(const Scene& scene, const std::atomic<bool>* stop = nullptr);
+double prepare_excitation_grids(const Scene& scene, uint64_t seed, const std::atomic<bool>* stop = nullptr);
 
 }  // namespace chlorovdb

@@ -104,7 +104,7 @@ RenderStats render(const Scene& scene, Film& film, const RenderOptions& options)
   // Learned from the scene before the first pass, once per scene; its time is part of the render's.
   arena.execute([&] {
     prepare_continuation_guides(scene);
-    prepare_excitation_grids(scene, options.stop);
+    prepare_excitation_grids(scene, options.seed, options.stop);
   });
 
   auto stopped = [&] { return options.stop && options.stop->load(std::memory_order_relaxed); };

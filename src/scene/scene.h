@@ -91,8 +91,9 @@ struct RenderSettings {
   DirectLightThroughGlass direct_light_through_glass = DirectLightThroughGlass::connect;
   ContinuationDirections continuation_directions = ContinuationDirections::uniform;
   ExcitationEstimate excitation_estimate = ExcitationEstimate::rays;
-  int64_t excitation_photons = 1 << 20;  // per fluorescent pigment and medium
+  int64_t excitation_photons = 1 << 18;  // per fluorescent pigment and medium
   int excitation_grid_cells = 32;        // along the medium's longest axis
+  float excitation_photons_aimed = 0.5f;  // share of the photons aimed at the medium (the rest: the light's own density)
   CameraWavelengths camera_wavelengths = CameraWavelengths::scene;
   // Both kept to measure what the defaults buy (docs/fluorescence.md); neither
   // applies to the `reference` estimator, which always draws λ' uniformly below

@@ -115,6 +115,7 @@ RenderSettings read_render_settings(ParamReader& top, const SceneOverrides& o, s
                                 : ExcitationEstimate::rays;
     s.excitation_photons = r->get_int("excitation_photons", int(s.excitation_photons), 1, 1 << 30);
     s.excitation_grid_cells = r->get_int("excitation_grid_cells", s.excitation_grid_cells, 1, 64);
+    s.excitation_photons_aimed = r->get_float("excitation_photons_aimed", s.excitation_photons_aimed, 0.f, 0.99f);
     s.camera_wavelengths = r->get_enum("camera_wavelengths", "scene", {"scene", "visible"}) == "visible"
                                ? CameraWavelengths::visible
                                : CameraWavelengths::scene;

@@ -7,6 +7,7 @@
 
 #include "checkpoint/checkpoint.h"
 #include "core/error.h"
+#include "integrator/excitation_photons.h"
 #include "media/medium.h"
 
 namespace chlorovdb {
@@ -32,7 +33,7 @@ Signature make_signature(const Scene& scene, const RenderJob& job) {
   // Only when asked for, so renders without AOVs keep matching older checkpoints and parts.
   if (s.aovs) sig.emplace_back("aovs", fmt::format("{}", fmt::join(aov_list(s.aovs), ",")));
   if (s.excitation_estimate == ExcitationEstimate::photons)
-    sig.emplace_back("excitation_photons", fmt::format("{} photons, {} cells", s.excitation_photons, s.excitation_grid_cells));
+    sig.emplace_back("excitation_photons", describe_excitation_photons(s));
   return sig;
 }
 
@@ -275,7 +276,7 @@ Image film_image(const Scene& scene, const RenderJob& job, const Film& film, int
   m.set("wavelengths_per_path", s.wavelengths);
   m.set("fluorescence", to_string(s.fluorescence));
   if (s.excitation_estimate == ExcitationEstimate::photons)
-    m.set("excitation_photons", fmt::format("{} photons, {} cells", s.excitation_photons, s.excitation_grid_cells));
+    m.set("excitation_photons", describe_excitation_photons(s));
   {  // the majorant cell edge each grid medium chose (media/medium.cpp), for benchmarks
     std::string cells;
     for (const Medium& med : scene.media)

@@ -360,14 +360,19 @@ constexpr double kSolvent = 30.0;  // 1/m: the emission is attenuated too, so th
 
 TEST(ExcitationPhotons, SettingsAreReadAndChecked) {
   SlabSetup s;
-  EXPECT_EQ(slab_scene(s, "slab_photons_default", 0.0).settings.excitation_estimate, ExcitationEstimate::rays);
-  s.render_extra = R"(, "excitation_estimate": "photons", "excitation_photons": 5000, "excitation_grid_cells": 12)";
+  const Scene defaults = slab_scene(s, "slab_photons_default", 0.0);
+  EXPECT_EQ(defaults.settings.excitation_estimate, ExcitationEstimate::rays);
+  EXPECT_EQ(defaults.settings.excitation_photons_aimed, 0.5f);
+  s.render_extra =
+      R"(, "excitation_estimate": "photons", "excitation_photons": 5000, "excitation_grid_cells": 12, "excitation_photons_aimed": 0.8)";
   const Scene photons = slab_scene(s, "slab_photons_set", 0.0);
   EXPECT_EQ(photons.settings.excitation_estimate, ExcitationEstimate::photons);
   EXPECT_EQ(photons.settings.excitation_photons, 5000);
   EXPECT_EQ(photons.settings.excitation_grid_cells, 12);
+  EXPECT_EQ(photons.settings.excitation_photons_aimed, 0.8f);
   for (const char* bad : {R"(, "excitation_estimate": "photon")", R"(, "excitation_photons": 0)",
-                          R"(, "excitation_grid_cells": 65)"}) {
+                          R"(, "excitation_grid_cells": 65)", R"(, "excitation_photons_aimed": 1)",
+                          R"(, "excitation_photons_aimed": -0.1)"}) {
     s.render_extra = bad;
     EXPECT_THROW(slab_scene(s, "slab_photons_bad", 0.0), InputError) << bad;
   }
@@ -487,9 +492,28 @@ TEST(ExcitationPhotons, AStopDuringThePrePassLeavesNoGrids) {
   const Scene scene = slab_scene(s, "slab_photons_stop", 0.0);
   const std::atomic<bool> stop{true};
   EXPECT_FALSE(trace_excitation_photons(scene, PhotonTracing{}, &stop));
-  prepare_excitation_grids(scene, &stop);
+  prepare_excitation_grids(scene, 0, &stop);
   EXPECT_FALSE(scene.excitation_grids);
-  prepare_excitation_grids(scene);
+  prepare_excitation_grids(scene, 0);
   ASSERT_TRUE(scene.excitation_grids);
   EXPECT_NE(scene.excitation_grid(0, 0), nullptr);
+}
+
+// The photons' streams come from the render's seed: one seed gives one grid (parts
+// of a render agree), another seed an independent one.
+TEST(ExcitationPhotons, TheGridFollowsTheRendersSeed) {
+  SlabSetup s;
+  s.render_extra = R"(, "excitation_estimate": "photons", "excitation_photons": 20000, "excitation_grid_cells": 8)";
+  const auto centre_cell = [&](uint64_t seed) {
+    const Scene scene = slab_scene(s, "slab_photons_seed", 0.0);
+    prepare_excitation_grids(scene, seed);
+    const ExcitationGrid* g = scene.excitation_grid(0, 0);
+    EXPECT_NE(g, nullptr);
+    const float* v = g ? g->at(g->region().center()) : nullptr;
+    EXPECT_NE(v, nullptr);
+    return v ? std::vector<float>(v, v + ExcitationGrid::kBins) : std::vector<float>{};
+  };
+  const std::vector<float> a = centre_cell(1), b = centre_cell(1), c = centre_cell(2);
+  EXPECT_EQ(a, b);
+  EXPECT_NE(a, c);
 }
