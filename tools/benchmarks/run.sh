@@ -77,6 +77,14 @@ variants_for() {  # $1 scene file
     # and the quantum yield as a roulette instead of a weight.
     echo "excitation=uniform|--set render.excitation_sampling=uniform"
     echo "Q=roulette|--set render.quantum_yield_mode=roulette"
+    # Excitation from a photon grid traced before the first pass (consistent, biased
+    # by its cells) instead of excitation rays; and, behind glass, the two older ways
+    # for excitation rays to meet it (docs/fluorescence.md).
+    echo "excitation_estimate=photons|--set render.excitation_estimate=photons"
+    if grep -q '"dielectric"' "$1"; then
+      echo "excitation_through_glass=block|--set render.excitation_through_glass=block"
+      echo "excitation_through_glass=fresnel|--set render.excitation_through_glass=fresnel"
+    fi
   fi
   for n in 1 2 4 8 16; do echo "wavelengths=$n|--wavelengths $n"; done
   echo "camera_wavelengths=visible|--set render.camera_wavelengths=visible"
@@ -267,7 +275,13 @@ time on top of \`default\`: the excitation wavelength drawn uniformly over the e
 instead of ∝ light × ε × λ′ (\`excitation=uniform\`, \`--set render.excitation_sampling=uniform\`)
 and the quantum yield as a roulette instead of a weight (\`Q=roulette\`,
 \`--set render.quantum_yield_mode=roulette\`), both unbiased (docs/fluorescence.md; the thesis's
-estimator always does both, so these two show what each choice buys on its own); wavelengths per
+estimator always does both, so these two show what each choice buys on its own); excitation read
+from a photon grid traced before the first pass instead of excitation rays
+(\`excitation_estimate=photons\`: consistent, biased by the grid's cells; its pre-pass is part of
+its time) and, in scenes with glass, the excitation rays stopped at glass
+(\`excitation_through_glass=block\`) or crossing it straight weighted by Fresnel transmission
+(\`excitation_through_glass=fresnel\`, an approximation) instead of solving for the refracted
+paths; wavelengths per
 path (\`--wavelengths\`); the camera's wavelengths drawn from the eye's density alone instead of the
 scene's mixture of it with the lights' spectra and the pigments' re-emission
 (\`camera_wavelengths=visible\`, \`--set render.camera_wavelengths=visible\`); and the renderer's skips of unneeded work
