@@ -196,6 +196,11 @@ int render(const RenderArgs& a) {
              a.checkpoint.empty() ? ""
                                   : fmt::format(" (checkpoint {})", r.ranks > 1 ? a.checkpoint.string() + ".rank*" : r.checkpoint.string()));
   if (stopped.reason != StopReason::none) fmt::print(stderr, "stopped early: {}\n", describe(stopped));
+  if (scene.excitation_grids)
+    fmt::print(stderr,
+               "photon grid: {:.2g} % RMS relative standard error per cell (the photons' noise, the same at "
+               "any spp; 4x render.excitation_photons halves it)\n",
+               100.0 * excitation_grid_error(scene));
   if (r.nonfinite_samples > 0) fmt::print(stderr, "warning: {} non-finite samples were dropped\n", r.nonfinite_samples);
   return r.interrupted ? 130 : 0;
 }

@@ -72,6 +72,22 @@ void ExcitationGrid::add_medium_volume(const Vec3& a, const Vec3& b, float cross
   for_each_cell(a, b, [&](size_t cell, float length) { medium_volume_[cell] += cross_section * length; });
 }
 
+double ExcitationGrid::cell_total(size_t cell) const {
+  double sum = 0;
+  for (int b = 0; b < kBins; ++b) sum += values_[cell * kBins + size_t(b)];
+  return sum;
+}
+
+void ExcitationGrid::set_tally_errors(std::vector<float> errors) {
+  errors_ = std::move(errors);
+  double variance = 0, square = 0;
+  for (size_t c = 0; c < errors_.size() && c < cell_count(); ++c) {
+    variance += double(errors_[c]) * errors_[c];
+    square += cell_total(c) * cell_total(c);
+  }
+  relative_error_ = square > 0 ? float(std::sqrt(variance / square)) : 0.f;
+}
+
 void ExcitationGrid::add(const ExcitationGrid& other) {
   for (size_t i = 0; i < values_.size(); ++i) values_[i] += other.values_[i];
   for (size_t i = 0; i < medium_volume_.size(); ++i) medium_volume_[i] += other.medium_volume_[i];
@@ -84,6 +100,7 @@ void ExcitationGrid::normalize(double photons) {
     // lines) is taken as full: its tally is small either way.
     const double volume = medium_volume_[c] > 0.f ? std::min(double(medium_volume_[c]), cell) : cell;
     for (int b = 0; b < kBins; ++b) values_[c * kBins + size_t(b)] = float(values_[c * kBins + size_t(b)] / (photons * volume));
+    if (c < errors_.size()) errors_[c] = float(errors_[c] / (photons * volume));
   }
 }
 

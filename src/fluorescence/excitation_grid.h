@@ -46,6 +46,18 @@ class ExcitationGrid {
   void normalize(double photons);
   // The kBins values of the cell holding x; nullptr outside the region.
   const float* at(const Vec3& x) const;
+  // Cells are numbered x fastest, then y, then z.
+  size_t cell_count() const { return medium_volume_.size(); }
+  // A cell's values summed over the bins.
+  double cell_total(size_t cell) const;
+  // The photons' noise, measured by the tracing from its independent chunks before
+  // normalize() (which scales it with the values): per cell, the standard error of
+  // cell_total (same units as the tallies when set); relative_error() is their RMS
+  // over the RMS of the totals, cells weighted by the tally they hold, as the image
+  // weights them. 0 where not measured.
+  void set_tally_errors(std::vector<float> errors);
+  double cell_error(size_t cell) const { return cell < errors_.size() ? errors_[cell] : 0.0; }
+  float relative_error() const { return relative_error_; }
   float cell_volume() const { return cell_size_.x * cell_size_.y * cell_size_.z; }
 
  private:
@@ -57,6 +69,8 @@ class ExcitationGrid {
   void for_each_cell(const Vec3& a, const Vec3& b, F add_length) const;
   std::vector<float> values_;         // cells × kBins
   std::vector<float> medium_volume_;  // per cell, m³
+  std::vector<float> errors_;         // per cell: standard error of cell_total
+  float relative_error_ = 0.f;
 };
 
 }  // namespace chlorovdb

@@ -171,6 +171,24 @@ void measure_medium_volume(const Scene& scene, int medium, ExcitationGrid& grid,
     }
 }
 
+// The standard error of each cell's summed tally from the independent chunks:
+// the variance of a sum of K chunk tallies is K times their sample variance.
+std::vector<float> tally_errors_from_chunks(const std::vector<ExcitationGrid>& chunks) {
+  const size_t K = chunks.size();
+  if (K < 2) return {};
+  std::vector<float> errors(chunks[0].cell_count());
+  std::vector<double> t(K);
+  for (size_t c = 0; c < errors.size(); ++c) {
+    double sum = 0;
+    for (size_t k = 0; k < K; ++k) sum += t[k] = chunks[k].cell_total(c);
+    const double mean = sum / double(K);
+    double deviations = 0;
+    for (double x : t) deviations += (x - mean) * (x - mean);
+    errors[c] = float(std::sqrt(double(K) * deviations / double(K - 1)));
+  }
+  return errors;
+}
+
 ExcitationGrid trace_pigment(const Scene& scene, int medium, int k, const PhotonTracing& tracing,
                              const std::atomic<bool>* stop) {
   const FluorescentPigment& fp = scene.fluorescence[size_t(medium)][size_t(k)];
@@ -198,8 +216,10 @@ ExcitationGrid trace_pigment(const Scene& scene, int medium, int k, const Photon
       trace_photon(scene, medium, fp, emission, target, tracing, chunks[size_t(chunk)], rng);
     }
   });
+  std::vector<float> errors = tally_errors_from_chunks(chunks);
   ExcitationGrid grid = std::move(chunks[0]);
   for (int c = 1; c < kChunks; ++c) grid.add(chunks[size_t(c)]);
+  grid.set_tally_errors(std::move(errors));
   Rng lines(hash_combine(tracing.seed, hash_combine(uint64_t(medium), uint64_t(k))), 0);
   measure_medium_volume(scene, medium, grid, lines);
   grid.normalize(double(tracing.photons));
@@ -222,6 +242,14 @@ std::optional<std::vector<std::vector<ExcitationGrid>>> trace_excitation_photons
 std::string describe_excitation_photons(const RenderSettings& s) {
   return fmt::format("{} photons per pigment, {:g}% aimed, {} cells", s.excitation_photons,
                      100.f * s.excitation_photons_aimed, s.excitation_grid_cells);
+}
+
+float excitation_grid_error(const Scene& scene) {
+  float worst = 0.f;
+  if (scene.excitation_grids)
+    for (const auto& per_medium : *scene.excitation_grids)
+      for (const ExcitationGrid& g : per_medium) worst = std::max(worst, g.relative_error());
+  return worst;
 }
 
 bool uses_excitation_photons(const Scene& scene) {

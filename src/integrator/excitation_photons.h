@@ -47,6 +47,10 @@ std::optional<std::vector<std::vector<ExcitationGrid>>> trace_excitation_photons
 // checkpoint's signature: "262144 photons per pigment, 50% aimed, 32 cells".
 std::string describe_excitation_photons(const RenderSettings& settings);
 
+// The largest relative_error() of the scene's photon grids (0 before they are
+// traced): the photons' noise a render carries whatever its samples per pixel.
+float excitation_grid_error(const Scene& scene);
+
 // Whether a render of this scene reads excitation from photon grids.
 bool uses_excitation_photons(const Scene& scene);
 

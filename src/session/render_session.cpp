@@ -277,6 +277,7 @@ Image film_image(const Scene& scene, const RenderJob& job, const Film& film, int
   m.set("fluorescence", to_string(s.fluorescence));
   if (s.excitation_estimate == ExcitationEstimate::photons)
     m.set("excitation_photons", describe_excitation_photons(s));
+  if (scene.excitation_grids) m.set("excitation_grid_error", fmt::format("{:.3g}", excitation_grid_error(scene)));
   {  // the majorant cell edge each grid medium chose (media/medium.cpp), for benchmarks
     std::string cells;
     for (const Medium& med : scene.media)

@@ -174,6 +174,30 @@ TEST(RenderCli, MetadataNamesTheMajorantCellSize) {
   EXPECT_NE(std::find(kMajorantCellSizes.begin(), kMajorantCellSizes.end(), size), kMajorantCellSizes.end());
 }
 
+// A photon-grid render says how noisy its grid is, in the log and the image's
+// metadata, and four times the photons halve it.
+TEST(RenderCli, PhotonRenderReportsItsGridsError) {
+  const TestDir dir;
+  const std::string scene = (std::filesystem::path(CHLOROVDB_SOURCE_DIR) / "scenes/default.json").string();
+  const auto error_with = [&](const std::string& photons) {
+    const auto r = run({kExe, "render", scene, "-o", (dir / "photons.exr").string(), "--resolution", "8x6", "--spp", "1",
+                        "--threads", "1", "--set", "render.excitation_estimate=photons", "--set",
+                        "render.excitation_photons=" + photons},
+                       dir / "photons.log");
+    EXPECT_EQ(r.status, 0) << r.output;
+    EXPECT_NE(r.output.find("photon grid: "), std::string::npos) << r.output;
+    const Image img = read_exr(dir / "photons.exr");
+    const MetadataValue* v = img.metadata.find("excitation_grid_error");
+    EXPECT_NE(v, nullptr);
+    return v && std::holds_alternative<std::string>(*v) ? std::stod(std::get<std::string>(*v)) : 0.0;
+  };
+  // Counts where the cells hold enough photons for the chunks' spread to measure
+  // their noise (at 2^14 the spread still underestimates it).
+  const double coarse = error_with("262144"), fine = error_with("1048576");
+  EXPECT_GT(coarse, 0.0);
+  EXPECT_NEAR(fine / coarse, 0.5, 0.05);
+}
+
 // `render --set` edits the scene in memory: a scene in a read-only folder renders,
 // nothing is written beside it, its relative paths still resolve against its
 // folder, and the edit changes the image (a stronger lamp, a brighter picture).

@@ -517,3 +517,46 @@ TEST(ExcitationPhotons, TheGridFollowsTheRendersSeed) {
   EXPECT_EQ(a, b);
   EXPECT_NE(a, c);
 }
+
+// The grid's reported noise (from its independent chunks) is the noise it has: two
+// grids traced with different streams differ, cell by cell, by √2 times their
+// reported standard errors (over the inner cells, whose medium volume is exact:
+// the outer ones' is measured with the stream's own jitter), and four times the
+// photons halve the grid's relative error.
+TEST(ExcitationPhotons, TheGridsReportedErrorIsItsNoise) {
+  SlabSetup s;
+  s.render_extra = R"(, "excitation_estimate": "photons")";
+  const Scene scene = slab_scene(s, "slab_photons_error", 0.0);
+  const auto trace = [&](uint64_t seed, int64_t photons) {
+    PhotonTracing tracing;
+    tracing.photons = photons;
+    tracing.cells_per_axis = 16;
+    tracing.seed = seed;
+    auto grids = trace_excitation_photons(scene, tracing);
+    EXPECT_TRUE(grids);
+    return grids ? (*grids)[0][0] : ExcitationGrid{};
+  };
+  const ExcitationGrid a = trace(1, 1 << 16), b = trace(2, 1 << 16), fine = trace(3, 1 << 18);
+  ASSERT_FALSE(a.empty());
+  ASSERT_GT(a.relative_error(), 0.f);
+  const auto n = a.cells();
+  double difference = 0, reported = 0;
+  int inner = 0;
+  for (int iz = 1; iz + 1 < n[2]; ++iz)
+    for (int iy = 1; iy + 1 < n[1]; ++iy)
+      for (int ix = 1; ix + 1 < n[0]; ++ix) {
+        const size_t c = size_t((iz * n[1] + iy) * n[0] + ix);
+        const double d = a.cell_total(c) - b.cell_total(c);
+        difference += d * d;
+        reported += a.cell_error(c) * a.cell_error(c) + b.cell_error(c) * b.cell_error(c);
+        ++inner;
+      }
+  ASSERT_GT(inner, 100);
+  // A photon crosses a whole column of the thin slab's cells, so the columns are the
+  // independent units: Σ d² has a relative standard deviation of about √(2/columns),
+  // its square root half that; 4 of them bound the ratio.
+  const int columns = (n[0] - 2) * (n[1] - 2);
+  const double ratio = std::sqrt(difference / reported);
+  EXPECT_NEAR(ratio, 1.0, 0.5 * 4 * std::sqrt(2.0 / columns)) << columns << " inner columns";
+  EXPECT_NEAR(fine.relative_error() / a.relative_error(), 0.5, 0.05);
+}
