@@ -23,7 +23,12 @@ struct ScatterVertex {
 // Returns the MIS-weighted contribution without the path throughput.
 // `through_glass`: delta lights connect through smooth dielectrics by solving
 // for the refracted paths (specular_connection.h); no other strategy reaches
-// them there. Area lights through glass come from BSDF-sampled paths.
+// them there. Area lights through glass come from BSDF-sampled paths, or with
+// `area_through_glass` also from the same solve toward a point on the light
+// (the floor's caustic of a lamp seen through a vessel): the path tracer then
+// drops the BSDF-sampled paths the connection owns (connection_owns), as
+// excitation continuations do, and the shadow ray keeps the straight line
+// where it crosses no glass (MIS with BSDF sampling).
 // SMS's random seeds run at one in four of these connections, weighted by 4:
 // every diffuse vertex pays for a seed, most find nothing, and the caustic's
 // relMSE × time came out 1.3× lower than at every connection (glass ball on a
@@ -31,9 +36,14 @@ struct ScatterVertex {
 // that also reflect find the spot lights' glints off the teapot's glass on the
 // sweep, at 2.6× the total layer's relMSE (teapot_50uM_D65_UVB_aim2, 512 spp).
 constexpr SeedPolicy kCameraSeeds{0.25f, false};
+// Area lights: the partition with BSDF-sampled paths (connection_owns) counts on
+// seeds that reflect too, as the excitation connection's; the straight line's
+// path without glass is the shadow ray's.
+constexpr SeedPolicy kCameraAreaSeeds{0.25f, true, false};
 template <typename ScatterFn>
 SampledSpectrum sample_direct_light(const Scene& scene, const ScatterVertex& v, const SampledSpectrum& r_p,
-                                    PreparedMedia& media, Rng& rng, bool through_glass, ScatterFn&& scatter) {
+                                    PreparedMedia& media, Rng& rng, bool through_glass, bool area_through_glass,
+                                    ScatterFn&& scatter) {
   if (scene.light_sampler.empty()) return {};
   const auto pick = scene.light_sampler.sample(rng.uniform());
   if (!pick || pick->pmf == 0.f) return {};
@@ -45,22 +55,29 @@ SampledSpectrum sample_direct_light(const Scene& scene, const ScatterVertex& v, 
       for (int i = 0; i < arriving->count; ++i) sum += scatter(arriving->paths[i].wi).first * arriving->paths[i].L;
     return sum / (pick->pmf * r_p.average(lambda.count()));
   }
+  SampledSpectrum through;  // area lights through glass (area_through_glass)
+  if (area_through_glass && std::holds_alternative<AreaLight>(light)) {
+    if (const auto arriving = light_through_dielectrics(scene, v.origin, pick->index, Point2{rng.uniform(), rng.uniform()},
+                                                        media, rng, kCameraAreaSeeds))
+      for (int i = 0; i < arriving->count; ++i) through += scatter(arriving->paths[i].wi).first * arriving->paths[i].L;
+    through /= pick->pmf * r_p.average(lambda.count());
+  }
   const auto ls = sample_Li(light, LightSampleContext{v.origin.p, v.n}, Point2{rng.uniform(), rng.uniform()}, lambda,
                             scene.geometry);
-  if (!ls || ls->L.is_black() || !(ls->pdf > 0.f)) return {};
+  if (!ls || ls->L.is_black() || !(ls->pdf > 0.f)) return through;
   const auto [f, scatter_pdf] = scatter(ls->wi);
-  if (f.is_black()) return {};
+  if (f.is_black()) return through;
   const float light_pdf = ls->pdf * pick->pmf;
   // A delta light has no MIS partner: a transmittance estimate alone, with the scene's estimator.
   ConnectionOptions options;
   options.mis = !ls->is_delta;
   LightConnection c =
       connect_to_light(scene, v.origin, LightTarget{ls->wi, ls->p_light, ls->is_infinite}, media, rng, options);
-  if (c.blocked) return {};
+  if (c.blocked) return through;
   if (ls->is_delta) return f * c.T * ls->L / (light_pdf * r_p.average(lambda.count()));
   c.r_l *= r_p * light_pdf;
   c.r_u *= r_p * scatter_pdf;
-  return f * c.T * ls->L / (c.r_l + c.r_u).average(lambda.count());
+  return through + f * c.T * ls->L / (c.r_l + c.r_u).average(lambda.count());
 }
 
 }  // namespace
@@ -83,14 +100,36 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
   // sliver, where strongly absorbed (UV) excitation deposits most of its energy.
   Vec3 segment_start = ray.o;
   SurfaceHit prev_hit;  // storage for prev.origin.hit
-  // Specular glass events (crossings and mirror reflections) since the origin
-  // while nothing else happened: the chain connection_owns() compares with the
-  // excitation connection's.
-  const Vec3 origin = ray.o;
+  // Specular glass events (crossings and mirror reflections) since the walk's
+  // origin while nothing else happened: the chain connection_owns() compares with
+  // the connection's. The origin is the path's start (an excitation
+  // continuation: the excitation connection owns even a clear straight line) or,
+  // with area lights connected through glass, the last scattering vertex (its
+  // shadow ray samples the clear straight line itself).
+  const bool direct_through_glass =
+      scene.settings.direct_light_through_glass != DirectLightThroughGlass::block && dielectric_shape_count(scene) > 0;
+  const bool area_through_glass =
+      direct_through_glass && scene.settings.direct_light_through_glass == DirectLightThroughGlass::all;
+  Vec3 walk_origin = ray.o;
+  SurfaceHit walk_hit;  // the origin's surface, if on one: the connection starts off it
+  bool walk_on_surface = false;
   SpecularChain walked;
   bool walked_only_glass = options.skip_emitters_the_connection_owns;
-  const bool direct_through_glass =
-      scene.settings.direct_light_through_glass == DirectLightThroughGlass::connect && dielectric_shape_count(scene) > 0;
+  bool walk_owns_clear_line = options.skip_emitters_the_connection_owns;
+  const auto start_walk = [&](const Vec3& p, const SurfaceHit* on) {
+    walk_origin = p;
+    walk_on_surface = on != nullptr;
+    if (on) walk_hit = *on;
+    walked.count = 0;
+    walked_only_glass = area_through_glass;
+    walk_owns_clear_line = false;
+  };
+  // Where the connection from the walk's origin toward y starts (light_through_dielectrics
+  // offsets a surface point toward the light): the seeds connection_owns draws must
+  // leave from the same point, or a seed grazing the surface would be lost.
+  const auto walk_start_toward = [&](const Vec3& y) {
+    return walk_on_surface ? scene.geometry.spawn_ray(walk_hit, y - walk_hit.p).o : walk_origin;
+  };
   ++stats.paths;
 
   // Light leaving an emitter toward the path, MIS-weighted against light sampling.
@@ -168,9 +207,11 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
                 }
                 const Vec3 wo = -ray.d;
                 const ScatterVertex v{{p, medium, nullptr}, Vec3{}};
-                L.other += beta * sample_direct_light(scene, v, r_u, media, rng, direct_through_glass, [&](const Vec3& wi) {
-                             return std::pair{phase_eval(mp.phase, wo, wi), phase_pdf(mp.phase, wo, wi)};
-                           });
+                L.other += beta * sample_direct_light(scene, v, r_u, media, rng, direct_through_glass, area_through_glass,
+                                                      [&](const Vec3& wi) {
+                                                        return std::pair{phase_eval(mp.phase, wo, wi),
+                                                                         phase_pdf(mp.phase, wo, wi)};
+                                                      });
                 const MediumPhaseSample ps = phase_sample(mp.phase, wo, Point2{rng.uniform(), rng.uniform()});
                 if (!(ps.pdf > 0.f)) {
                   terminated = true;
@@ -182,7 +223,7 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
                 specular_bounce = false;
                 count_emitters = true;
                 scattered = true;
-                walked_only_glass = false;
+                start_walk(p, nullptr);
                 ray = Ray{p, ps.wi};
                 segment_start = p;
                 return false;
@@ -230,7 +271,9 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
     }
 
     const ShapeBinding& binding = scene.shapes[hit->shape_id];
-    if (binding.area_light >= 0 && !(walked_only_glass && connection_owns(scene, origin, hit->p, walked, lambda[0], rng)))
+    if (binding.area_light >= 0 &&
+        !(walked_only_glass && (walked.count > 0 || walk_owns_clear_line) &&
+          connection_owns(scene, walk_start_toward(hit->p), hit->p, walked, lambda[0], rng)))
       add_emitted(Le_area(std::get<AreaLight>(scene.lights[binding.area_light]), hit->ng, -ray.d, lambda),
                   binding.area_light, &*hit);
 
@@ -249,13 +292,17 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
     const int medium_here = dot(wo, hit->ng) > 0.f ? binding.medium_outside : binding.medium_inside;
     const ScatterVertex v{{hit->p, medium_here, &prev_hit}, hit->ns};
     if (!bsdf.is_specular()) {
-      L.other += beta * sample_direct_light(scene, v, r_u, media, rng, direct_through_glass, [&](const Vec3& wi) {
-                   return std::pair{bsdf.f(wo, wi) * std::fabs(dot(wi, hit->ns)), bsdf.pdf(wo, wi)};
-                 });
+      L.other += beta * sample_direct_light(scene, v, r_u, media, rng, direct_through_glass, area_through_glass,
+                                            [&](const Vec3& wi) {
+                                              return std::pair{bsdf.f(wo, wi) * std::fabs(dot(wi, hit->ns)),
+                                                               bsdf.pdf(wo, wi)};
+                                            });
     }
     const auto bs = bsdf.sample(wo, rng.uniform(), Point2{rng.uniform(), rng.uniform()});
     if (!bs || bs->pdf == 0.f) break;
-    if (walked_only_glass) {
+    if (!bsdf.is_specular()) {
+      start_walk(hit->p, &*hit);
+    } else if (walked_only_glass) {
       const bool glass = bs->is_specular && std::holds_alternative<Dielectric>(scene.materials[binding.material]);
       if (glass && walked.count < kMaxSpecularChain)
         walked.faces[walked.count++] =

@@ -510,7 +510,7 @@ std::optional<ArrivingLight> light_through_dielectrics(const Scene& scene, const
     }
   };
   const auto chain = straight_line_chain(scene, x, end.y, end.to_infinity);
-  if (chain) solve(*chain);
+  if (chain && (chain->count > 0 || seeds.clear_line)) solve(*chain);
   if (chain && std::holds_alternative<AreaLight>(light)) {
     // A path bent at the first faces can pass beside the rest of the straight
     // line's chain: from deep in a beaker, out through the free surface and over

@@ -170,6 +170,9 @@ int dielectric_shape_count(const Scene& scene);
 struct SeedPolicy {
   float probability = 1.f;
   bool reflect = true;
+  // Count the straight line's own path where it crosses no glass. Camera paths'
+  // next-event estimation samples that one itself (MIS with BSDF sampling).
+  bool clear_line = true;
 };
 struct ArrivingLight {
   struct Path {

@@ -50,7 +50,7 @@ enum class ExcitationThroughGlass { connect, fresnel, block };
 //  connect — solve for the refracted paths, as excitation rays do;
 //  block   — stop at glass (those lights then add nothing behind glass).
 // Area lights behind glass are reached by BSDF-sampled paths either way.
-enum class DirectLightThroughGlass { connect, block };
+enum class DirectLightThroughGlass { connect, block, all };
 // The first direction of an excitation continuation (full mode): uniform over
 // the sphere, or from the medium's guide learned before the render, mixed with
 // uniform (guided; measured no better on the default scene, kept to measure:

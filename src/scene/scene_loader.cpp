@@ -103,9 +103,12 @@ RenderSettings read_render_settings(ParamReader& top, const SceneOverrides& o, s
     s.excitation_through_glass = glass == "fresnel" ? ExcitationThroughGlass::fresnel
                                  : glass == "block" ? ExcitationThroughGlass::block
                                                     : ExcitationThroughGlass::connect;
-    s.direct_light_through_glass = r->get_enum("direct_light_through_glass", "connect", {"connect", "block"}) == "block"
-                                       ? DirectLightThroughGlass::block
-                                       : DirectLightThroughGlass::connect;
+    {
+      const std::string direct = r->get_enum("direct_light_through_glass", "connect", {"connect", "block", "all"});
+      s.direct_light_through_glass = direct == "block" ? DirectLightThroughGlass::block
+                                     : direct == "all" ? DirectLightThroughGlass::all
+                                                       : DirectLightThroughGlass::connect;
+    }
     s.continuation_directions =
         r->get_enum("continuation_directions", "uniform", {"uniform", "guided"}) == "guided"
             ? ContinuationDirections::guided

@@ -721,6 +721,58 @@ TEST(SpecularManifold, FloorBehindAGlassBallMatchesPhotonsFromTheLight) {
   }
 }
 
+TEST(SpecularManifold, FloorCausticOfAnAreaLightThroughAGlassBallAgreesWithBsdfSampling) {
+  // render.direct_light_through_glass = all: the floor's next-event estimation also
+  // solves for the paths through the ball to a point on a small area light, and
+  // the path tracer drops the BSDF-sampled paths the connection owns. Against
+  // "connect" (the area light through glass from BSDF-sampled paths alone, exact):
+  // the floor's radiance at two points, one in the ball's focused shadow (the
+  // straight line to the light crosses the ball) and one beside it (only random
+  // seeds find the paths through the ball), within 4σ of both combined. A
+  // connection counted on top of the BSDF paths it owns, or a partition whose
+  // seeds leave from the floor instead of off it, fails it; and the connection
+  // must carry the light.
+  const auto scene_with = [](const std::string& mode) {
+    return load_scene(write_scene("area_ball_" + mode, R"({
+  "render": {"resolution": [4, 4], "spp": 1, "wavelengths": 1, "max_depth": 3,
+             "direct_light_through_glass": ")" + mode + R"("},
+  "camera": {"type": "orthographic", "position": [0, 0, 2], "look_at": [0, 0, 0], "height": 0.01},
+  "materials": {"glass": {"type": "dielectric", "ior": 1.5}, "floor": {"type": "diffuse", "albedo": 0.5}},
+  "shapes": [
+    {"type": "mesh", "file": ")" + write_smooth_sphere("area_ball", 0.02f) +
+                                               R"(", "material": "glass"},
+    {"type": "box", "min": [-1, -1, -1.06], "max": [1, 1, -0.06], "material": "floor"},
+    {"type": "quad", "corner": [0.0, -0.01, 0.2], "edge_u": [0, 0.03, 0], "edge_v": [0.03, 0, 0],
+     "emission": {"spectrum": {"gaussian": [420, 8]}, "scale": 2}}]})"));
+  };
+  const Scene all = scene_with("all"), connect = scene_with("connect");
+  ASSERT_EQ(all.settings.direct_light_through_glass, DirectLightThroughGlass::all);
+  const Vec3 w = normalize(Vec3(0.8f, 0.4f, 0.45f));  // the camera's view of the floor, missing the ball
+  const std::array<Vec3, 2> points{Vec3(-0.006f, -0.002f, -0.06f), Vec3(-0.03f, -0.02f, -0.06f)};
+  Rng rng(test_seed(53), 0);
+  for (size_t k = 0; k < points.size(); ++k) {
+    std::array<Estimate, 2> radiance;
+    for (int m = 0; m < 2; ++m) {
+      const Scene& scene = m == 0 ? all : connect;
+      PathStats stats;
+      for (int i = 0; i < (m == 0 ? 20000 : 200000); ++i) {
+        SampledWavelengths lambda = SampledWavelengths::single(kLambda);
+        radiance[size_t(m)].add(trace_path(scene, Ray{points[k] + w, -w}, -1, lambda, rng, stats).other[0]);
+      }
+    }
+    const double sigma = std::hypot(radiance[0].sigma(), radiance[1].sigma());
+    std::printf("point %zu: all %.5g ± %.2g (20k paths), connect %.5g ± %.2g (200k paths)\n", k, radiance[0].mean(),
+                radiance[0].sigma(), radiance[1].mean(), radiance[1].sigma());
+    EXPECT_GT(radiance[1].mean(), 10 * radiance[1].sigma()) << "point " << k << " must see the light through the ball";
+    EXPECT_NEAR(radiance[0].mean(), radiance[1].mean(), 4 * sigma) << "point " << k;
+    // In the shadow the straight line's solve carries the light: per path, far
+    // less noise than BSDF sampling (beside it, SMS's seed counts are noisy too).
+    if (k == 0)
+      EXPECT_LT(radiance[0].sigma() * std::sqrt(20000.0), 0.1 * radiance[1].sigma() * std::sqrt(200000.0))
+          << "per-path noise";
+  }
+}
+
 TEST(SpecularConnection, DirectLightLanesFollowTheGlassDispersion) {
   // Every lane a camera path carries gets the light of the hero's refracted
   // path: with constant-index glass each lane as if it were traced alone; with
