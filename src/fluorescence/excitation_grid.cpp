@@ -82,8 +82,9 @@ void ExcitationGrid::set_tally_errors(std::vector<float> errors) {
   errors_ = std::move(errors);
   double variance = 0, square = 0;
   for (size_t c = 0; c < errors_.size() && c < cell_count(); ++c) {
+    const double total = cell_total(c);
     variance += double(errors_[c]) * errors_[c];
-    square += cell_total(c) * cell_total(c);
+    square += total * total;
   }
   relative_error_ = square > 0 ? float(std::sqrt(variance / square)) : 0.f;
 }

@@ -110,25 +110,22 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
       scene.settings.direct_light_through_glass != DirectLightThroughGlass::block && dielectric_shape_count(scene) > 0;
   const bool area_through_glass =
       direct_through_glass && scene.settings.direct_light_through_glass == DirectLightThroughGlass::all;
-  Vec3 walk_origin = ray.o;
-  SurfaceHit walk_hit;  // the origin's surface, if on one: the connection starts off it
-  bool walk_on_surface = false;
+  // The walk's origin as the connection sees it (a surface origin's hit is kept
+  // in walk_hit: the connection and connection_owns' seeds start off its surface).
+  SurfaceHit walk_hit;
+  ShadowOrigin walk_from{ray.o, medium, nullptr};
   SpecularChain walked;
   bool walked_only_glass = options.skip_emitters_the_connection_owns;
   bool walk_owns_clear_line = options.skip_emitters_the_connection_owns;
-  const auto start_walk = [&](const Vec3& p, const SurfaceHit* on) {
-    walk_origin = p;
-    walk_on_surface = on != nullptr;
-    if (on) walk_hit = *on;
+  const auto start_walk = [&](const ShadowOrigin& at) {
+    walk_from = at;
+    if (at.hit) {
+      walk_hit = *at.hit;  // the vertex's hit storage is reused by the next bounce
+      walk_from.hit = &walk_hit;
+    }
     walked.count = 0;
     walked_only_glass = area_through_glass;
     walk_owns_clear_line = false;
-  };
-  // Where the connection from the walk's origin toward y starts (light_through_dielectrics
-  // offsets a surface point toward the light): the seeds connection_owns draws must
-  // leave from the same point, or a seed grazing the surface would be lost.
-  const auto walk_start_toward = [&](const Vec3& y) {
-    return walk_on_surface ? scene.geometry.spawn_ray(walk_hit, y - walk_hit.p).o : walk_origin;
   };
   ++stats.paths;
 
@@ -223,7 +220,7 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
                 specular_bounce = false;
                 count_emitters = true;
                 scattered = true;
-                start_walk(p, nullptr);
+                start_walk(v.origin);
                 ray = Ray{p, ps.wi};
                 segment_start = p;
                 return false;
@@ -273,7 +270,8 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
     const ShapeBinding& binding = scene.shapes[hit->shape_id];
     if (binding.area_light >= 0 &&
         !(walked_only_glass && (walked.count > 0 || walk_owns_clear_line) &&
-          connection_owns(scene, walk_start_toward(hit->p), hit->p, walked, lambda[0], rng)))
+          connection_owns(scene, connection_start(scene, walk_from, hit->p - walk_from.p), hit->p, walked, lambda[0],
+                          rng)))
       add_emitted(Le_area(std::get<AreaLight>(scene.lights[binding.area_light]), hit->ng, -ray.d, lambda),
                   binding.area_light, &*hit);
 
@@ -301,7 +299,7 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
     const auto bs = bsdf.sample(wo, rng.uniform(), Point2{rng.uniform(), rng.uniform()});
     if (!bs || bs->pdf == 0.f) break;
     if (!bsdf.is_specular()) {
-      start_walk(hit->p, &*hit);
+      start_walk(v.origin);
     } else if (walked_only_glass) {
       const bool glass = bs->is_specular && std::holds_alternative<Dielectric>(scene.materials[binding.material]);
       if (glass && walked.count < kMaxSpecularChain)

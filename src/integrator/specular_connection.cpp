@@ -460,6 +460,10 @@ bool connection_owns(const Scene& scene, const Vec3& x, const Vec3& y, const Spe
   return false;
 }
 
+Vec3 connection_start(const Scene& scene, const ShadowOrigin& from, const Vec3& toward) {
+  return from.hit ? scene.geometry.spawn_ray(*from.hit, toward).o : from.p;
+}
+
 int dielectric_shape_count(const Scene& scene) {
   int count = 0;
   for (const ShapeBinding& b : scene.shapes) count += is_dielectric(scene, b);
@@ -485,9 +489,7 @@ std::optional<ArrivingLight> light_through_dielectrics(const Scene& scene, const
   } else {
     end.y = -std::get<DistantLight>(light).direction;  // toward the light
   }
-  // Every path starts at x: a medium point, or a surface point offset off its
-  // surface toward the light (the solves and legs cast plain rays from x).
-  const Vec3 x = from.hit ? scene.geometry.spawn_ray(*from.hit, end.to_infinity ? end.y : end.y - from.p).o : from.p;
+  const Vec3 x = connection_start(scene, from, end.to_infinity ? end.y : end.y - from.p);
   const int medium = from.medium;
 
   ArrivingLight arriving;

@@ -150,6 +150,11 @@ bool solved_from_straight_line(const Scene& scene, const Vec3& x, const Vec3& y,
 bool connection_owns(const Scene& scene, const Vec3& x, const Vec3& y, const SpecularChain& walked, float lambda_nm,
                      Rng& rng);
 
+// Where a connection from `from` toward the direction `toward` starts: a medium
+// point itself, a surface point offset off its surface to that side (the solves
+// and legs cast plain rays from it; connection_owns' seeds must leave from it too).
+Vec3 connection_start(const Scene& scene, const ShadowOrigin& from, const Vec3& toward);
+
 // Shapes with a smooth dielectric material: zero means no connection needs solving.
 int dielectric_shape_count(const Scene& scene);
 
