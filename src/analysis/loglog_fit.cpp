@@ -4,12 +4,12 @@
 
 namespace chlorovdb {
 
-PowerFit fit_power_law(std::span<const double> x, std::span<const double> y) {
+PowerFit fit_power_law(std::span<const double> x, std::span<const double> y, double x_min) {
   PowerFit fit;
   double sx = 0, sy = 0, sxx = 0, sxy = 0, syy = 0;
   int n = 0;
   for (size_t i = 0; i < x.size() && i < y.size(); ++i) {
-    if (!(x[i] > 0) || !(y[i] > 0) || !std::isfinite(x[i]) || !std::isfinite(y[i])) continue;
+    if (!(x[i] > 0) || !(y[i] > 0) || x[i] < x_min || !std::isfinite(x[i]) || !std::isfinite(y[i])) continue;
     const double lx = std::log(x[i]), ly = std::log(y[i]);
     sx += lx;
     sy += ly;

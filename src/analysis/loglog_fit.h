@@ -14,9 +14,11 @@ struct PowerFit {
   int points = 0;          // points used (x > 0 and y > 0)
 };
 
-// Points with a non-positive or non-finite x or y are ignored; fewer than two
-// usable points (or all x equal) give points < 2 and exponent 0.
-PowerFit fit_power_law(std::span<const double> x, std::span<const double> y);
+// Points with a non-positive or non-finite x or y are ignored, and so are those
+// with x < x_min (the asymptotic rate: an estimator whose rare paths are not yet
+// sampled at small x converges faster there than its rate, then slower); fewer
+// than two usable points (or all x equal) give points < 2 and exponent 0.
+PowerFit fit_power_law(std::span<const double> x, std::span<const double> y, double x_min = 0);
 
 // A quantity measured on independent runs (seeds): its mean and the standard
 // error of that mean (the runs' sample spread / sqrt(runs); 0 below two runs).

@@ -54,6 +54,21 @@ TEST(LogLogFit, RecoversAnExactPowerLaw) {
   EXPECT_LT(fit_power_law(std::vector<double>{1.0}, std::vector<double>{1.0}).points, 2);
 }
 
+TEST(LogLogFit, FromXMinFitsOnlyTheTail) {
+  // Flat up to 16 (a rare path not yet sampled), then n^-1: the whole range is
+  // flatter than -1, the tail from 16 on is exactly -1.
+  std::vector<double> x, y;
+  for (double n = 1; n <= 512; n *= 2) {
+    x.push_back(n);
+    y.push_back(n < 16 ? 1.0 : 16.0 / n);
+  }
+  EXPECT_GT(fit_power_law(x, y).exponent, -0.8);
+  const PowerFit tail = fit_power_law(x, y, 16);
+  EXPECT_EQ(tail.points, 6);
+  EXPECT_NEAR(tail.exponent, -1.0, 1e-12);
+  EXPECT_NEAR(tail.coefficient, 16.0, 1e-9);
+}
+
 TEST(LogLogFit, MeanExponentOverRunsHasTheSpreadOfTheRuns) {
   // Exponents -0.9, -1.0, -1.1 (+ one unusable fit): mean -1, sample sd 0.1, se 0.1/sqrt(3).
   std::vector<PowerFit> fits;

@@ -1,7 +1,7 @@
 // chlorovdb_bench: the helper behind tools/benchmarks/run.sh (not installed).
 //   plot   CSV... -o OUT.svg      RMSE against time / samples, one series per CSV label
 //   table  CSV... --baseline L    markdown efficiency table (last point of each label)
-//   slope  CSV... --baseline L    convergence rate over seeds (one CSV per seed) and relMSE x time
+//   slope  CSV... --baseline L    convergence rate over seeds (one CSV per seed; whole range and last octaves) and relMSE x time
 //   reference-check CSV... --reference REF.exr   is the reference converged enough to rank the CSVs' variants?
 //   cost-growth --out DIR         time per sample against optical depth and grid size
 // CSVs are those of `chlorovdb converge`.
@@ -229,9 +229,12 @@ int reference_check(const std::vector<std::string>& files, const std::vector<std
 // spp, relMSE and CPU time averaged over seeds, their product (lower is better:
 // `vs` is baseline's product / this one's, the equal-time efficiency ratio) and
 // the share of the squared error held by the worst 0.1 % of pixels (mean, max).
-int slope(const std::vector<std::string>& files, const std::string& layer, const std::string& baseline) {
+// The RMSE exponent is also fitted on the last `tail_octaves` octaves of spp only:
+// a heavy tail whose rare paths first appear at a few tens of spp bends the
+// whole-range fit while the estimator already converges at its rate above them.
+int slope(const std::vector<std::string>& files, const std::string& layer, const std::string& baseline, int tail_octaves) {
   struct Label {
-    std::vector<PowerFit> corrected, raw;
+    std::vector<PowerFit> corrected, raw, tail;
     std::vector<double> rel_mse, seconds, top_share, bias;
     int spp = 0;
   };
@@ -251,6 +254,7 @@ int slope(const std::vector<std::string>& files, const std::string& layer, const
     }
     l.corrected.push_back(fit_power_law(spp, corrected));
     l.raw.push_back(fit_power_law(spp, raw));
+    l.tail.push_back(fit_power_law(spp, corrected, std::ldexp(double(rows.back().spp), -tail_octaves)));
     if (l.spp != 0 && l.spp != rows.back().spp) throw InputError(file, "spp", std::to_string(rows.back().spp), "seeds of one label must end at the same spp");
     l.spp = rows.back().spp;
     l.rel_mse.push_back(rows.back().error.rel_mse);
@@ -262,16 +266,17 @@ int slope(const std::vector<std::string>& files, const std::string& layer, const
   auto standard_error = [](const std::vector<double>& v) { return mean_over_runs(v).standard_error; };
   auto product = [&](const Label& l) { return mean(l.rel_mse) * mean(l.seconds); };
   const double base = by_label.count(baseline) ? product(by_label[baseline]) : 0.0;
-  fmt::print("| variant | seeds | relMSE slope (ref. share removed) | raw | RMSE slope | spp | relMSE | CPU s | relMSE × s | vs {} "
-             "| worst 0.1 % px share (mean / max) | mean bias |\n",
-             baseline);
-  fmt::print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
+  fmt::print("| variant | seeds | relMSE slope (ref. share removed) | raw | RMSE slope | RMSE slope, last {} octaves | spp | relMSE | CPU s "
+             "| relMSE × s | vs {} | worst 0.1 % px share (mean / max) | mean bias |\n",
+             tail_octaves, baseline);
+  fmt::print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
   for (const std::string& label : order) {
     const Label& l = by_label[label];
-    const MeanOverRuns c = mean_exponent(l.corrected), r = mean_exponent(l.raw);
-    fmt::print("| {} | {} | {:.3f} ± {:.3f} | {:.3f} ± {:.3f} | {:.3f} ± {:.3f} | {} | {:.3e} ± {:.1e} | {:.2f} | {:.3e} | {} | {:.1f} / {:.1f} % | "
-               "{:+.1f} ± {:.1f} % |\n",
-               label, c.runs, c.mean, c.standard_error, r.mean, r.standard_error, c.mean / 2, c.standard_error / 2, l.spp,
+    const MeanOverRuns c = mean_exponent(l.corrected), r = mean_exponent(l.raw), t = mean_exponent(l.tail);
+    fmt::print("| {} | {} | {:.3f} ± {:.3f} | {:.3f} ± {:.3f} | {:.3f} ± {:.3f} | {:.3f} ± {:.3f} | {} | {:.3e} ± {:.1e} | {:.2f} | {:.3e} | {} "
+               "| {:.1f} / {:.1f} % | {:+.1f} ± {:.1f} % |\n",
+               label, c.runs, c.mean, c.standard_error, r.mean, r.standard_error, c.mean / 2, c.standard_error / 2, t.mean / 2,
+               t.standard_error / 2, l.spp,
                mean(l.rel_mse), standard_error(l.rel_mse), mean(l.seconds), product(l),
                base > 0 && product(l) > 0 ? fmt::format("{:.2f}×", base / product(l)) : "–", 100 * mean(l.top_share),
                100 * *std::max_element(l.top_share.begin(), l.top_share.end()), 100 * mean(l.bias), 100 * standard_error(l.bias));
@@ -461,6 +466,9 @@ int main(int argc, char** argv) {
   sl->add_option("csv", files)->required();
   sl->add_option("--layer", layer);
   sl->add_option("--baseline", baseline, "Label the efficiency ratios are relative to");
+  int tail_octaves = 4;
+  sl->add_option("--tail-octaves", tail_octaves, "Also fit the rate on the last this many octaves of spp (default 4)")
+      ->check(CLI::Range(1, 30));
   CLI::App* rc = app.add_subcommand("reference-check", "Whether a reference is converged enough to rank the variants of converge CSVs");
   std::vector<std::string> layers = {"total", "fluorescence"};
   std::string reference;
@@ -482,7 +490,7 @@ int main(int argc, char** argv) {
     if (p->parsed()) return plot(files, layer, title, out, time_label);
     if (t->parsed()) return table(files, layer, baseline);
     if (b->parsed()) return best(files, layer, baseline, candidates);
-    if (sl->parsed()) return slope(files, layer, baseline);
+    if (sl->parsed()) return slope(files, layer, baseline, tail_octaves);
     if (rc->parsed()) return reference_check(files, layers, reference, budget, max_spp);
     return cost_growth(out, large, threads);
   } catch (const std::exception& e) {

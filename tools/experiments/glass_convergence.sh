@@ -10,7 +10,9 @@
 #    over spp 1, 2, 4, ..., SPP_MAX (CPU clock, THREADS threads).
 # 3. `chlorovdb_bench slope`: per layer, the relMSE-vs-spp log-log slope fitted per
 #    seed on relMSE minus the reference's own share (expected -1; the RMSE slope is
-#    half of it, expected -0.5), its mean ± standard error over seeds, and, at SPP_MAX,
+#    half of it, expected -0.5), its mean ± standard error over seeds, the RMSE slope
+#    over the last 4 octaves of spp alone (the asymptotic rate, past the spp where a
+#    heavy tail's rare paths first appear), and, at SPP_MAX,
 #    relMSE × CPU time (lower is better; ratios of it are equal-time efficiency
 #    ratios) and the share of the squared error held by the worst 0.1 % of pixels.
 # Writes $OUT/<scene>/summary.md. Environment knobs:
