@@ -107,7 +107,7 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
   // with area lights connected through glass, the last scattering vertex (its
   // shadow ray samples the clear straight line itself).
   const bool direct_through_glass =
-      scene.settings.direct_light_through_glass != DirectLightThroughGlass::block && dielectric_shape_count(scene) > 0;
+      scene.settings.direct_light_through_glass != DirectLightThroughGlass::block && !scene.dielectric_shapes.empty();
   const bool area_through_glass =
       direct_through_glass && scene.settings.direct_light_through_glass == DirectLightThroughGlass::all;
   // The walk's origin as the connection sees it (a surface origin's hit is kept

@@ -375,29 +375,25 @@ SampledSpectrum refracted_path_light(const Scene& scene, const Vec3& x, int medi
 // straight line misses through curved glass mostly start: measured on the
 // teapot's spot lights, this half keeps the estimate's variance near the
 // straight-line solve's), half toward a point uniform by area on one of the
-// scene's `dielectrics` (> 0) dielectric shapes picked uniformly (solutions far
-// off the line, a lens beside it).
-std::optional<Vec3> sample_seed_direction(const Scene& scene, int dielectrics, const Vec3& x, const Vec3& y,
-                                          bool to_infinity, Rng& rng) {
+// scene's dielectric shapes (there is one at least) picked uniformly (solutions
+// far off the line, a lens beside it).
+std::optional<Vec3> sample_seed_direction(const Scene& scene, const Vec3& x, const Vec3& y, bool to_infinity, Rng& rng) {
   constexpr float kConeCos = 0.8660254f;  // cos 30°
   if (rng.uniform() < 0.5f) {
     const Vec3 axis = normalize(to_infinity ? y : y - x);
     return Frame::from_z(axis).to_world(sample_uniform_cone(Point2{rng.uniform(), rng.uniform()}, kConeCos));
   }
-  int pick = std::min(int(rng.uniform() * dielectrics), dielectrics - 1);
+  const int dielectrics = int(scene.dielectric_shapes.size());
+  const int pick = std::min(int(rng.uniform() * float(dielectrics)), dielectrics - 1);
   const Point2 u{rng.uniform(), rng.uniform()};
-  for (int s = 0; s < int(scene.shapes.size()); ++s) {
-    if (!is_dielectric(scene, scene.shapes[s]) || pick-- > 0) continue;
-    const Vec3 d = scene.geometry.sample_area(s, u).p - x;
-    const float len = length(d);
-    return len > 0.f ? std::optional(d / len) : std::nullopt;
-  }
-  return std::nullopt;
+  const Vec3 d = scene.geometry.sample_area(scene.dielectric_shapes[size_t(pick)], u).p - x;
+  const float len = length(d);
+  return len > 0.f ? std::optional(d / len) : std::nullopt;
 }
 
-std::optional<RefractedPath> solve_from_seed(const Scene& scene, int dielectrics, const Vec3& x, const Vec3& y,
+std::optional<RefractedPath> solve_from_seed(const Scene& scene, const Vec3& x, const Vec3& y,
                                              bool to_infinity, float lambda_nm, bool reflect_too, Rng& rng) {
-  const auto d = sample_seed_direction(scene, dielectrics, x, y, to_infinity, rng);
+  const auto d = sample_seed_direction(scene, x, y, to_infinity, rng);
   if (!d) return std::nullopt;
   const auto chain = specular_seed_chain(scene, x, *d, y, to_infinity, lambda_nm, reflect_too, rng);
   if (!chain) return std::nullopt;
@@ -430,16 +426,14 @@ int max_seed_trials(bool area_light, std::span<const ChainFace> faces) {
 
 std::optional<RefractedPath> solve_from_random_seed(const Scene& scene, const Vec3& x, const Vec3& y, bool to_infinity,
                                                     float lambda_nm, bool reflect_too, Rng& rng) {
-  const int dielectrics = dielectric_shape_count(scene);
-  if (dielectrics == 0) return std::nullopt;
-  return solve_from_seed(scene, dielectrics, x, y, to_infinity, lambda_nm, reflect_too, rng);
+  if (scene.dielectric_shapes.empty()) return std::nullopt;
+  return solve_from_seed(scene, x, y, to_infinity, lambda_nm, reflect_too, rng);
 }
 
 bool connection_owns(const Scene& scene, const Vec3& x, const Vec3& y, const SpecularChain& walked, float lambda_nm,
                      Rng& rng) {
   if (solved_from_straight_line(scene, x, y, walked, lambda_nm)) return true;
-  const int dielectrics = dielectric_shape_count(scene);
-  if (walked.count == 0 || dielectrics == 0) return false;
+  if (walked.count == 0 || scene.dielectric_shapes.empty()) return false;
   const float tolerance = kOwnedVertexTolerance * length(y - x);
   const std::span<const ChainFace> walked_faces(walked.faces.data(), size_t(walked.count));
   const auto is_walked = [&](const std::optional<RefractedPath>& path) {
@@ -456,18 +450,12 @@ bool connection_owns(const Scene& scene, const Vec3& x, const Vec3& y, const Spe
   // excitation connection's: reflecting too) all miss it, with probability (1 − p)^N.
   const int max_trials = max_seed_trials(true, walked_faces);
   for (int trial = 0; trial < max_trials; ++trial)
-    if (is_walked(solve_from_seed(scene, dielectrics, x, y, false, lambda_nm, true, rng))) return true;
+    if (is_walked(solve_from_seed(scene, x, y, false, lambda_nm, true, rng))) return true;
   return false;
 }
 
 Vec3 connection_start(const Scene& scene, const ShadowOrigin& from, const Vec3& toward) {
   return from.hit ? scene.geometry.spawn_ray(*from.hit, toward).o : from.p;
-}
-
-int dielectric_shape_count(const Scene& scene) {
-  int count = 0;
-  for (const ShapeBinding& b : scene.shapes) count += is_dielectric(scene, b);
-  return count;
 }
 
 std::optional<ArrivingLight> light_through_dielectrics(const Scene& scene, const ShadowOrigin& from, int light_index,
@@ -534,10 +522,9 @@ std::optional<ArrivingLight> light_through_dielectrics(const Scene& scene, const
   // that returns one adds nothing. The count is capped (max_seed_trials); the
   // expected work is one seed plus one geometric run per other solution,
   // whatever the p.
-  const int dielectrics = dielectric_shape_count(scene);
-  if (dielectrics > 0 && (seeds.probability >= 1.f || rng.uniform() < seeds.probability)) {
+  if (!scene.dielectric_shapes.empty() && (seeds.probability >= 1.f || rng.uniform() < seeds.probability)) {
     const auto seed = [&] {
-      return solve_from_seed(scene, dielectrics, x, end.y, end.to_infinity, lambda_nm, seeds.reflect, rng);
+      return solve_from_seed(scene, x, end.y, end.to_infinity, lambda_nm, seeds.reflect, rng);
     };
     const auto found = seed();
     const float tolerance =

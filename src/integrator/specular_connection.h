@@ -155,9 +155,6 @@ bool connection_owns(const Scene& scene, const Vec3& x, const Vec3& y, const Spe
 // and legs cast plain rays from it; connection_owns' seeds must leave from it too).
 Vec3 connection_start(const Scene& scene, const ShadowOrigin& from, const Vec3& toward);
 
-// Shapes with a smooth dielectric material: zero means no connection needs solving.
-int dielectric_shape_count(const Scene& scene);
-
 // Light from one light reaching a point through the dielectric chain of the
 // straight line to one light sample (area lights: a point uniform by area from
 // `u`, and the chain's prefixes), plus the SMS estimate of one other solution:

@@ -135,6 +135,9 @@ struct Scene {
   GeometryScene geometry;
   std::vector<ShapeBinding> shapes;  // by shape id
   std::vector<Material> materials;
+  // Ids of the shapes with a smooth dielectric material: the interfaces connections
+  // through glass solve for and seed toward (resolve_at_load fills it).
+  std::vector<int> dielectric_shapes;
   std::vector<Light> lights;
   LightSampler light_sampler;        // camera-path NEE: visible power; uniform environments excluded
   WavelengthDistribution camera_wavelengths;  // what camera samples draw their lanes from
@@ -142,7 +145,7 @@ struct Scene {
   std::vector<Medium> media;
   std::vector<std::string> medium_names;
   std::vector<bool> medium_scatters;  // anything in it scatters (molecules or particles)
-  std::vector<MediumPolicy> medium_policy;  // per medium, resolved at load (resolve_medium_policies)
+  std::vector<MediumPolicy> medium_policy;  // per medium, resolved at load (resolve_at_load)
   std::vector<std::vector<FluorescentPigment>> fluorescence;  // per medium
   // Per medium, where excitation continuations go first. Learned from the scene
   // itself, so the first render() trains them (integrator/continuation_guide_training.h)
@@ -159,9 +162,14 @@ struct Scene {
   bool track_by_transmittance(int medium) const { return medium_policy[medium].track_by_transmittance; }
   TransmittanceEstimator transmittance_estimator(int medium) const { return medium_policy[medium].estimator; }
 
-  // Fills medium_policy from the settings, media and fluorescence (the loader
-  // calls it last; call it again after changing any of them).
-  void resolve_medium_policies() {
+  // Fills the records resolved once at load: medium_policy from the settings,
+  // media and fluorescence, dielectric_shapes from the shapes' materials (the
+  // loader calls it last; call it again after changing any of them).
+  void resolve_at_load() {
+    dielectric_shapes.clear();
+    for (size_t s = 0; s < shapes.size(); ++s)
+      if (shapes[s].material >= 0 && std::holds_alternative<Dielectric>(materials[size_t(shapes[s].material)]))
+        dielectric_shapes.push_back(int(s));
     medium_policy.assign(media.size(), MediumPolicy{});
     for (size_t m = 0; m < media.size(); ++m) {
       MediumPolicy& p = medium_policy[m];

@@ -676,7 +676,7 @@ Scene load_scene(const nlohmann::json& json, const std::filesystem::path& file, 
                                      scene.medium_names[m]));
     }
   scene.camera_wavelengths = camera_wavelength_distribution(scene);
-  scene.resolve_medium_policies();
+  scene.resolve_at_load();
   return scene;
 }
 
