@@ -21,11 +21,21 @@ ExcitationGrid::ExcitationGrid(const Bounds3& region, const std::array<int, 3>& 
   cell_size_ = Vec3{d.x / float(n_[0]), d.y / float(n_[1]), d.z / float(n_[2])};
   medium_volume_.assign(size_t(n_[0]) * size_t(n_[1]) * size_t(n_[2]), 0.f);
   values_.assign(medium_volume_.size() * kBins, 0.f);
+  tally_moment_.assign(medium_volume_.size(), Vec3(0.f));
+  medium_moment_.assign(medium_volume_.size(), Vec3(0.f));
+  medium_spread_.assign(medium_volume_.size(), Vec3(0.f));
+  medium_lo_.assign(medium_volume_.size(), Vec3(kInfinity));
+  medium_hi_.assign(medium_volume_.size(), Vec3(-kInfinity));
 }
 
-// Amanatides–Woo traversal: add_length(cell, length) for every cell the segment a→b crosses.
+Vec3 ExcitationGrid::cell_center(const std::array<int, 3>& c) const {
+  return region_.lo + Vec3{(float(c[0]) + 0.5f) * cell_size_.x, (float(c[1]) + 0.5f) * cell_size_.y,
+                           (float(c[2]) + 0.5f) * cell_size_.z};
+}
+
+// Amanatides–Woo traversal over the cells the segment a→b crosses.
 template <typename F>
-void ExcitationGrid::for_each_cell(const Vec3& a, const Vec3& b, F add_length) const {
+void ExcitationGrid::for_each_cell(const Vec3& a, const Vec3& b, F add) const {
   const float length = distance(a, b);
   if (!(length > 0.f)) return;
   const Ray ray{a, (b - a) / length};
@@ -55,7 +65,8 @@ void ExcitationGrid::for_each_cell(const Vec3& a, const Vec3& b, F add_length) c
   while (t < t1) {
     const int k = t_next[0] < t_next[1] ? (t_next[0] < t_next[2] ? 0 : 2) : (t_next[1] < t_next[2] ? 1 : 2);
     const float t_exit = std::min(t_next[k], t1);
-    if (t_exit > t) add_length(size_t(cell_index(cell[0], cell[1], cell[2])), t_exit - t);
+    if (t_exit > t)
+      add(size_t(cell_index(cell[0], cell[1], cell[2])), t_exit - t, ray.at(0.5f * (t + t_exit)) - cell_center(cell));
     t = t_exit;
     cell[k] += step[k];
     if (cell[k] < 0 || cell[k] >= n_[k]) break;
@@ -65,11 +76,31 @@ void ExcitationGrid::for_each_cell(const Vec3& a, const Vec3& b, F add_length) c
 
 void ExcitationGrid::deposit(const Vec3& a, const Vec3& b, int bin, float value_per_length) {
   if (!(value_per_length > 0.f)) return;
-  for_each_cell(a, b, [&](size_t cell, float length) { values_[cell * kBins + size_t(bin)] += value_per_length * length; });
+  for_each_cell(a, b, [&](size_t cell, float length, const Vec3& mid) {
+    const float tally = value_per_length * length;
+    values_[cell * kBins + size_t(bin)] += tally;
+    tally_moment_[cell] += tally * mid;
+  });
 }
 
 void ExcitationGrid::add_medium_volume(const Vec3& a, const Vec3& b, float cross_section) {
-  for_each_cell(a, b, [&](size_t cell, float length) { medium_volume_[cell] += cross_section * length; });
+  const Vec3 d = b - a;
+  const float total = length(d);
+  if (!(total > 0.f)) return;
+  const Vec3 dir = d / total;
+  for_each_cell(a, b, [&](size_t cell, float length, const Vec3& mid) {
+    const float volume = cross_section * length;
+    medium_volume_[cell] += volume;
+    medium_moment_[cell] += volume * mid;
+    // ∫ (x − c)² along the piece: its midpoint's square plus the piece's own spread.
+    const Vec3 half = 0.5f * length * dir;
+    medium_spread_[cell] += volume * (mul(mid, mid) + mul(half, half) / 3.f);
+    for (int k = 0; k < 3; ++k) {
+      const float reach = std::abs(half[k]);
+      medium_lo_[cell][k] = std::min(medium_lo_[cell][k], mid[k] - reach);
+      medium_hi_[cell][k] = std::max(medium_hi_[cell][k], mid[k] + reach);
+    }
+  });
 }
 
 double ExcitationGrid::cell_total(size_t cell) const {
@@ -91,25 +122,59 @@ void ExcitationGrid::set_tally_errors(std::vector<float> errors) {
 
 void ExcitationGrid::add(const ExcitationGrid& other) {
   for (size_t i = 0; i < values_.size(); ++i) values_[i] += other.values_[i];
-  for (size_t i = 0; i < medium_volume_.size(); ++i) medium_volume_[i] += other.medium_volume_[i];
+  for (size_t i = 0; i < medium_volume_.size(); ++i) {
+    medium_volume_[i] += other.medium_volume_[i];
+    tally_moment_[i] += other.tally_moment_[i];
+    medium_moment_[i] += other.medium_moment_[i];
+    medium_spread_[i] += other.medium_spread_[i];
+    medium_lo_[i] = min(medium_lo_[i], other.medium_lo_[i]);
+    medium_hi_[i] = max(medium_hi_[i], other.medium_hi_[i]);
+  }
 }
 
 void ExcitationGrid::normalize(double photons) {
   const double cell = cell_volume();
+  profiles_.assign(medium_volume_.size(), Profile{Vec3(0.f), Vec3(0.f)});
   for (size_t c = 0; c < medium_volume_.size(); ++c) {
     // A cell the lines found no medium in but a photon did (a sliver between
     // lines) is taken as full: its tally is small either way.
     const double volume = medium_volume_[c] > 0.f ? std::min(double(medium_volume_[c]), cell) : cell;
+    // The profile 1 + g·(x − μ): with T the tally and V, m, s the medium's volume
+    // and moments about the centre, μ = m/V and, per axis, g = (T₁/T − μ) / (s/V − μ²):
+    // the tally's centroid offset over the medium's variance.
+    const double tally = cell_total(c);
+    if (medium_volume_[c] > 0.f && tally > 0) {
+      Profile& p = profiles_[c];
+      p.centroid = medium_moment_[c] / medium_volume_[c];
+      for (int k = 0; k < 3; ++k) {
+        const double variance = double(medium_spread_[c][k]) / medium_volume_[c] - double(p.centroid[k]) * p.centroid[k];
+        // Below a thousandth of the cell's own variance the medium is a sheet across that axis: no slope.
+        if (variance > 1e-3 * cell_size_[k] * cell_size_[k] / 12.0)
+          p.gradient[k] = float((tally_moment_[c][k] / tally - p.centroid[k]) / variance);
+      }
+      // The limiter: the profile's lowest value over the medium's extent is 1 − drop;
+      // scaling g down to drop = 1 keeps it non-negative there and the mean still 1.
+      float drop = 0.f;
+      for (int k = 0; k < 3; ++k)
+        drop += std::abs(p.gradient[k]) *
+                (p.gradient[k] > 0.f ? p.centroid[k] - medium_lo_[c][k] : medium_hi_[c][k] - p.centroid[k]);
+      if (drop > 1.f) p.gradient = p.gradient / drop;
+    }
     for (int b = 0; b < kBins; ++b) values_[c * kBins + size_t(b)] = float(values_[c * kBins + size_t(b)] / (photons * volume));
     if (c < errors_.size()) errors_[c] = float(errors_[c] / (photons * volume));
   }
 }
 
-const float* ExcitationGrid::at(const Vec3& x) const {
-  if (values_.empty() || !region_.contains(x)) return nullptr;
+ExcitationGrid::Lookup ExcitationGrid::at(const Vec3& x) const {
+  if (values_.empty() || !region_.contains(x)) return {};
   std::array<int, 3> c{};
   for (int k = 0; k < 3; ++k) c[k] = std::clamp(int((x[k] - region_.lo[k]) / cell_size_[k]), 0, n_[k] - 1);
-  return &values_[size_t(cell_index(c[0], c[1], c[2])) * kBins];
+  const size_t cell = size_t(cell_index(c[0], c[1], c[2]));
+  if (profiles_.empty()) return {&values_[cell * kBins], 1.f};
+  const Profile& p = profiles_[cell];
+  // Non-negative by the limiter within the medium's measured extent; beyond it
+  // (between the lines that measured it) the zero guards a steep slope.
+  return {&values_[cell * kBins], std::max(1.f + dot(p.gradient, x - cell_center(c) - p.centroid), 0.f)};
 }
 
 }  // namespace chlorovdb

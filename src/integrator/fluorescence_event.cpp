@@ -286,9 +286,9 @@ SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, 
   if (scene.settings.excitation_estimate == ExcitationEstimate::photons) {
     // Every route's excitation, tallied by the lamps' photons: one lookup.
     if (const ExcitationGrid* grid = scene.excitation_grid(medium, k))
-      if (const float* absorbed = grid->at(x))
+      if (const ExcitationGrid::Lookup absorbed = grid->at(x); absorbed.values)
         for (int b = 0; b < ExcitationGrid::kBins; ++b)
-          add_emission(kAbsorptionPerMolarExtinction * c * absorbed[b], ExcitationGrid::bin_center(b));
+          add_emission(kAbsorptionPerMolarExtinction * c * absorbed.profile * absorbed.values[b], ExcitationGrid::bin_center(b));
     return T * j / (ds.pdf * p_pigment);
   }
   float lp = 0.f;

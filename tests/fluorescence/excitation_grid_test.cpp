@@ -17,7 +17,7 @@ double total(const ExcitationGrid& g, int bin) {
       for (int ix = 0; ix < n[0]; ++ix) {
         const Vec3 centre = g.region().lo + Vec3{(ix + 0.5f) * size.x / n[0], (iy + 0.5f) * size.y / n[1],
                                                  (iz + 0.5f) * size.z / n[2]};
-        sum += g.at(centre)[bin];
+        sum += g.at(centre).values[bin];
       }
   return sum;
 }
@@ -31,8 +31,8 @@ TEST(ExcitationGrid, DepositSplitsTheTrackLengthOverTheCellsItCrosses) {
   const int bin = ExcitationGrid::bin_of(420.f);
   // Along x through one row of cells: a quarter in each of four cells.
   g.deposit({-1.f, 0.1f, 0.1f}, {3.f, 0.1f, 0.1f}, bin, 2.f);
-  for (int ix = 0; ix < 4; ++ix) EXPECT_NEAR(g.at({0.125f + 0.25f * ix, 0.1f, 0.1f})[bin], 0.5f, 1e-5f) << ix;
-  EXPECT_EQ(g.at({0.125f, 0.3f, 0.1f})[bin], 0.f);  // the next row
+  for (int ix = 0; ix < 4; ++ix) EXPECT_NEAR(g.at({0.125f + 0.25f * ix, 0.1f, 0.1f}).values[bin], 0.5f, 1e-5f) << ix;
+  EXPECT_EQ(g.at({0.125f, 0.3f, 0.1f}).values[bin], 0.f);  // the next row
   EXPECT_NEAR(total(g, bin), 2.0, 1e-5);
   EXPECT_EQ(total(g, bin + 1), 0.0);
   // Oblique, starting and ending inside: the whole length, whatever the cells.
@@ -43,7 +43,7 @@ TEST(ExcitationGrid, DepositSplitsTheTrackLengthOverTheCellsItCrosses) {
   ExcitationGrid h(Bounds3{{0, 0, 0}, {1, 1, 1}}, {5, 3, 7});
   h.deposit({-1.f, -1.f, -1.f}, {2.f, 2.f, 2.f}, 0, 1.f);
   EXPECT_NEAR(total(h, 0), std::sqrt(3.0), 1e-4);
-  EXPECT_EQ(h.at({1.5f, 0.5f, 0.5f}), nullptr);
+  EXPECT_EQ(h.at({1.5f, 0.5f, 0.5f}).values, nullptr);
 }
 
 TEST(ExcitationGrid, BinsCoverTheExcitationRange) {
@@ -60,6 +60,64 @@ TEST(ExcitationGrid, NormalizeDividesByTheMediumsVolumeInEachCell) {
   g.add_medium_volume({0.f, 0.5f, 0.5f}, {1.f, 0.5f, 0.5f}, 1.f);  // the first cell, whole
   g.add_medium_volume({1.f, 0.5f, 0.5f}, {1.5f, 0.5f, 0.5f}, 1.f);  // half the second
   g.normalize(4.0);
-  EXPECT_NEAR(g.at({0.5f, 0.5f, 0.5f})[3], 8.f / 4.f / 1.f, 1e-5f);
-  EXPECT_NEAR(g.at({1.5f, 0.5f, 0.5f})[3], 8.f / 4.f / 0.5f, 1e-5f);
+  EXPECT_NEAR(g.at({0.5f, 0.5f, 0.5f}).values[3], 8.f / 4.f / 1.f, 1e-5f);
+  EXPECT_NEAR(g.at({1.5f, 0.5f, 0.5f}).values[3], 8.f / 4.f / 0.5f, 1e-5f);
+}
+
+// A fluence that varies linearly, f = 1 + 2x, tallied by short segments along x
+// over a medium that fills the first cell and half the second: each cell keeps its
+// average over the medium's part, and its profile at any point of that part gives
+// back f there.
+TEST(ExcitationGrid, TheProfileReproducesALinearFluenceInsideEachCell) {
+  ExcitationGrid g(Bounds3{{0, 0, 0}, {2, 1, 1}}, {2, 1, 1});
+  constexpr int kLines = 16, kSteps = 600;
+  const float area = 1.f / (kLines * kLines), step = 1.5f / kSteps;
+  for (int j = 0; j < kLines; ++j)
+    for (int k = 0; k < kLines; ++k) {
+      const float y = (j + 0.5f) / kLines, z = (k + 0.5f) / kLines;
+      g.add_medium_volume({0.f, y, z}, {1.5f, y, z}, area);
+      for (int i = 0; i < kSteps; ++i) {
+        const float x0 = i * step, x1 = x0 + step;
+        g.deposit({x0, y, z}, {x1, y, z}, 0, area * (1.f + (x0 + x1)));
+      }
+    }
+  g.normalize(1.0);
+  EXPECT_NEAR(g.at({0.5f, 0.5f, 0.5f}).values[0], 2.f, 1e-3f);   // the mean of f over [0, 1]
+  EXPECT_NEAR(g.at({1.25f, 0.5f, 0.5f}).values[0], 3.5f, 1e-3f);  // over [1, 1.5]
+  for (const float x : {0.05f, 0.3f, 0.7f, 0.95f, 1.05f, 1.25f, 1.45f}) {
+    const ExcitationGrid::Lookup l = g.at({x, 0.3f, 0.8f});
+    EXPECT_NEAR(l.profile * l.values[0], 1.f + 2.f * x, 2e-3f) << "x = " << x;
+  }
+}
+
+
+// A fluence that falls e-fold in a tenth of the cell: its linear fit would go
+// negative across most of the cell, so the limiter scales the slope until the
+// profile is zero at the far face. The profile stays non-negative, its mean over
+// the medium stays 1 (the cell keeps its average; clamping the unlimited slope,
+// −4.8 per cell, at zero would raise it to 1.20) and it is 2 at the lit face.
+TEST(ExcitationGrid, TheSlopeLimiterKeepsTheCellsAverageAndTheProfileNonNegative) {
+  ExcitationGrid g(Bounds3{{0, 0, 0}, {1, 1, 1}}, {1, 1, 1});
+  constexpr int kLines = 8, kSteps = 1000;
+  const float area = 1.f / (kLines * kLines), step = 1.f / kSteps;
+  for (int j = 0; j < kLines; ++j)
+    for (int k = 0; k < kLines; ++k) {
+      const float y = (j + 0.5f) / kLines, z = (k + 0.5f) / kLines;
+      g.add_medium_volume({0.f, y, z}, {1.f, y, z}, area);
+      for (int i = 0; i < kSteps; ++i) {
+        const float x0 = i * step, x1 = x0 + step;
+        g.deposit({x0, y, z}, {x1, y, z}, 0, area * std::exp(-10.f * 0.5f * (x0 + x1)));
+      }
+    }
+  g.normalize(1.0);
+  double mean = 0;
+  constexpr int kSamples = 1000;
+  for (int i = 0; i < kSamples; ++i) {
+    const float profile = g.at({(i + 0.5f) / kSamples, 0.5f, 0.5f}).profile;
+    EXPECT_GE(profile, 0.f);
+    mean += profile / kSamples;
+  }
+  EXPECT_NEAR(mean, 1.0, 2e-3);
+  EXPECT_NEAR(g.at({0.f, 0.5f, 0.5f}).profile, 2.f, 2e-3f);
+  EXPECT_NEAR(g.at({1.f - 1e-6f, 0.5f, 0.5f}).profile, 0.f, 2e-3f);
 }
