@@ -431,9 +431,9 @@ std::optional<RefractedPath> solve_from_random_seed(const Scene& scene, const Ve
 }
 
 bool connection_owns(const Scene& scene, const Vec3& x, const Vec3& y, const SpecularChain& walked, float lambda_nm,
-                     Rng& rng) {
+                     Rng& rng, bool seeds) {
   if (solved_from_straight_line(scene, x, y, walked, lambda_nm)) return true;
-  if (walked.count == 0 || scene.dielectric_shapes.empty()) return false;
+  if (!seeds || walked.count == 0 || scene.dielectric_shapes.empty()) return false;
   const float tolerance = kOwnedVertexTolerance * length(y - x);
   const std::span<const ChainFace> walked_faces(walked.faces.data(), size_t(walked.count));
   const auto is_walked = [&](const std::optional<RefractedPath>& path) {

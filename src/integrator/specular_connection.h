@@ -144,11 +144,12 @@ std::optional<RefractedPath> solve_from_random_seed(const Scene& scene, const Ve
 bool solved_from_straight_line(const Scene& scene, const Vec3& x, const Vec3& y, const SpecularChain& walked,
                                float lambda_nm);
 // True when the connection owns that path: solved from the straight line, or
-// else with the probability that the connection's random seeds count it (one
-// of kMaxSeedTrials fresh seeds converges to it), so that the continuation's
-// share and the seeds' add up to the path once.
+// else (with `seeds`: the connection seeds too) with the probability that the
+// connection's random seeds count it (one of kMaxSeedTrials fresh seeds
+// converges to it), so that the continuation's share and the seeds' add up to
+// the path once.
 bool connection_owns(const Scene& scene, const Vec3& x, const Vec3& y, const SpecularChain& walked, float lambda_nm,
-                     Rng& rng);
+                     Rng& rng, bool seeds);
 
 // Where a connection from `from` toward the direction `toward` starts: a medium
 // point itself, a surface point offset off its surface to that side (the solves

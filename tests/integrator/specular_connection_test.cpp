@@ -224,8 +224,8 @@ TEST(SpecularConnection, ContinuationThroughWallIsOwned) {
   EXPECT_FALSE(solved_from_straight_line(scene, x, y, other, kLambda));
   // Not a path at all: no random seed converges to it either.
   Rng rng(test_seed(5), 0);
-  EXPECT_TRUE(connection_owns(scene, x, y, walked, kLambda, rng));
-  EXPECT_FALSE(connection_owns(scene, x, y, other, kLambda, rng));
+  EXPECT_TRUE(connection_owns(scene, x, y, walked, kLambda, rng, true));
+  EXPECT_FALSE(connection_owns(scene, x, y, other, kLambda, rng, true));
 }
 
 }  // namespace
@@ -375,7 +375,7 @@ TEST(SpecularConnection, PathThroughAnotherFaceIsOwnedBySeeds) {
   // A random seed converges to it: each call owns it with probability 1 − (1 − p)^1024.
   Rng rng(test_seed(41), 0);
   int owned = 0;
-  for (int i = 0; i < 16; ++i) owned += connection_owns(scene, kUnderLid, y, walked, kLambda, rng);
+  for (int i = 0; i < 16; ++i) owned += connection_owns(scene, kUnderLid, y, walked, kLambda, rng, true);
   std::printf("owned in %d of 16 calls\n", owned);
   EXPECT_GT(owned, 0);
 }
@@ -727,11 +727,11 @@ TEST(SpecularManifold, FloorCausticOfAnAreaLightThroughAGlassBallAgreesWithBsdfS
   // the path tracer drops the BSDF-sampled paths the connection owns. Against
   // "connect" (the area light through glass from BSDF-sampled paths alone, exact):
   // the floor's radiance at two points, one in the ball's focused shadow (the
-  // straight line to the light crosses the ball) and one beside it (only random
-  // seeds find the paths through the ball), within 4σ of both combined. A
-  // connection counted on top of the BSDF paths it owns, or a partition whose
-  // seeds leave from the floor instead of off it, fails it; and the connection
-  // must carry the light.
+  // straight line to the light crosses the ball) and one beside it (the paths
+  // through the ball lie off the straight line: no deterministic solve finds
+  // them, so BSDF sampling keeps them), within 4σ of both combined. A connection
+  // counted on top of the BSDF paths it owns fails it; and the connection must
+  // carry the light.
   const auto scene_with = [](const std::string& mode) {
     return load_scene(write_scene("area_ball_" + mode, R"({
   "render": {"resolution": [4, 4], "spp": 1, "wavelengths": 1, "max_depth": 3,
@@ -766,7 +766,7 @@ TEST(SpecularManifold, FloorCausticOfAnAreaLightThroughAGlassBallAgreesWithBsdfS
     EXPECT_GT(radiance[1].mean(), 10 * radiance[1].sigma()) << "point " << k << " must see the light through the ball";
     EXPECT_NEAR(radiance[0].mean(), radiance[1].mean(), 4 * sigma) << "point " << k;
     // In the shadow the straight line's solve carries the light: per path, far
-    // less noise than BSDF sampling (beside it, SMS's seed counts are noisy too).
+    // less noise than BSDF sampling.
     if (k == 0)
       EXPECT_LT(radiance[0].sigma() * std::sqrt(20000.0), 0.1 * radiance[1].sigma() * std::sqrt(200000.0))
           << "per-path noise";
