@@ -64,23 +64,29 @@ TEST(ExcitationGrid, NormalizeDividesByTheMediumsVolumeInEachCell) {
   EXPECT_NEAR(g.at({1.5f, 0.5f, 0.5f}).values[3], 8.f / 4.f / 0.5f, 1e-5f);
 }
 
+// Medium lines along x over [0, x_end] × the unit square (lines² of them), each
+// tallying `fluence` (a function of x) by `steps` short segments into bin 0.
+template <typename Fluence>
+void tally_lines_along_x(ExcitationGrid& g, float x_end, int lines, int steps, Fluence fluence) {
+  const float area = 1.f / float(lines * lines), step = x_end / float(steps);
+  for (int j = 0; j < lines; ++j)
+    for (int k = 0; k < lines; ++k) {
+      const float y = (j + 0.5f) / lines, z = (k + 0.5f) / lines;
+      g.add_medium_volume({0.f, y, z}, {x_end, y, z}, area);
+      for (int i = 0; i < steps; ++i) {
+        const float x0 = i * step, x1 = x0 + step;
+        g.deposit({x0, y, z}, {x1, y, z}, 0, area * fluence(0.5f * (x0 + x1)));
+      }
+    }
+}
+
 // A fluence that varies linearly, f = 1 + 2x, tallied by short segments along x
 // over a medium that fills the first cell and half the second: each cell keeps its
 // average over the medium's part, and its profile at any point of that part gives
 // back f there.
 TEST(ExcitationGrid, TheProfileReproducesALinearFluenceInsideEachCell) {
   ExcitationGrid g(Bounds3{{0, 0, 0}, {2, 1, 1}}, {2, 1, 1});
-  constexpr int kLines = 16, kSteps = 600;
-  const float area = 1.f / (kLines * kLines), step = 1.5f / kSteps;
-  for (int j = 0; j < kLines; ++j)
-    for (int k = 0; k < kLines; ++k) {
-      const float y = (j + 0.5f) / kLines, z = (k + 0.5f) / kLines;
-      g.add_medium_volume({0.f, y, z}, {1.5f, y, z}, area);
-      for (int i = 0; i < kSteps; ++i) {
-        const float x0 = i * step, x1 = x0 + step;
-        g.deposit({x0, y, z}, {x1, y, z}, 0, area * (1.f + (x0 + x1)));
-      }
-    }
+  tally_lines_along_x(g, 1.5f, 16, 600, [](float x) { return 1.f + 2.f * x; });
   g.normalize(1.0);
   EXPECT_NEAR(g.at({0.5f, 0.5f, 0.5f}).values[0], 2.f, 1e-3f);   // the mean of f over [0, 1]
   EXPECT_NEAR(g.at({1.25f, 0.5f, 0.5f}).values[0], 3.5f, 1e-3f);  // over [1, 1.5]
@@ -90,7 +96,6 @@ TEST(ExcitationGrid, TheProfileReproducesALinearFluenceInsideEachCell) {
   }
 }
 
-
 // A fluence that falls e-fold in a tenth of the cell: its linear fit would go
 // negative across most of the cell, so the limiter scales the slope until the
 // profile is zero at the far face. The profile stays non-negative, its mean over
@@ -98,17 +103,7 @@ TEST(ExcitationGrid, TheProfileReproducesALinearFluenceInsideEachCell) {
 // −4.8 per cell, at zero would raise it to 1.20) and it is 2 at the lit face.
 TEST(ExcitationGrid, TheSlopeLimiterKeepsTheCellsAverageAndTheProfileNonNegative) {
   ExcitationGrid g(Bounds3{{0, 0, 0}, {1, 1, 1}}, {1, 1, 1});
-  constexpr int kLines = 8, kSteps = 1000;
-  const float area = 1.f / (kLines * kLines), step = 1.f / kSteps;
-  for (int j = 0; j < kLines; ++j)
-    for (int k = 0; k < kLines; ++k) {
-      const float y = (j + 0.5f) / kLines, z = (k + 0.5f) / kLines;
-      g.add_medium_volume({0.f, y, z}, {1.f, y, z}, area);
-      for (int i = 0; i < kSteps; ++i) {
-        const float x0 = i * step, x1 = x0 + step;
-        g.deposit({x0, y, z}, {x1, y, z}, 0, area * std::exp(-10.f * 0.5f * (x0 + x1)));
-      }
-    }
+  tally_lines_along_x(g, 1.f, 8, 1000, [](float x) { return std::exp(-10.f * x); });
   g.normalize(1.0);
   double mean = 0;
   constexpr int kSamples = 1000;
