@@ -143,6 +143,8 @@ int render(const RenderArgs& a) {
   job.interrupt = &interrupt_requested();
   job.ranks = g_ranks;
   const bool root = job.ranks.rank == 0;
+  if (root)
+    for (const std::string& w : scene.warnings) fmt::print(stderr, "warning: {}\n", w);
   const PixelWindow crop = job.crop.value_or(PixelWindow{0, 0, s.width, s.height});
   const StoppingRule stopping = make_stopping_rule(a.target_error, a.target_region, a.time_limit, crop, job.ranks.size);
   if (a.adaptive)

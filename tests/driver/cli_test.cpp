@@ -198,6 +198,20 @@ TEST(RenderCli, PhotonRenderReportsItsGridsError) {
   EXPECT_NEAR(fine / coarse, 0.5, 0.05);
 }
 
+// The loader's doubts reach the user: a photon render of the leaf, whose pigment is a
+// thin shell in its grid's box, warns that the photon grid's cells average over it.
+TEST(RenderCli, PrintsTheScenesWarnings) {
+  const TestDir dir;
+  const std::string scene = (std::filesystem::path(CHLOROVDB_SOURCE_DIR) / "scenes/leaf_D65.json").string();
+  const auto r = run({kExe, "render", scene, "-o", (dir / "leaf.exr").string(), "--resolution", "4x3", "--spp", "1",
+                      "--threads", "1", "--set", "render.excitation_estimate=photons", "--set",
+                      "render.excitation_photons=4096"},
+                     dir / "leaf.log");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("warning: "), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("holds its pigment in a grid"), std::string::npos) << r.output;
+}
+
 // `render --set` edits the scene in memory: a scene in a read-only folder renders,
 // nothing is written beside it, its relative paths still resolve against its
 // folder, and the edit changes the image (a stronger lamp, a brighter picture).
