@@ -84,7 +84,14 @@ variants_for() {  # $1 scene file
     if grep -q '"dielectric"' "$1"; then
       echo "excitation_through_glass=block|--set render.excitation_through_glass=block"
       echo "excitation_through_glass=fresnel|--set render.excitation_through_glass=fresnel"
+      # Photons with camera connections to area lights through glass: the pair that
+      # gives both layers the Monte Carlo rate on the glass scenes (docs/fluorescence.md).
+      echo "excitation_estimate=photons+direct=all|--set render.excitation_estimate=photons --set render.direct_light_through_glass=all"
     fi
+  fi
+  # Camera next-event estimation through glass to area lights too (not only delta lights).
+  if grep -q '"dielectric"' "$1"; then
+    echo "direct_light_through_glass=all|--set render.direct_light_through_glass=all"
   fi
   for n in 1 2 4 8 16; do echo "wavelengths=$n|--wavelengths $n"; done
   echo "camera_wavelengths=visible|--set render.camera_wavelengths=visible"
@@ -179,6 +186,7 @@ for scene in "${scenes[@]}"; do
     printf 'Equal time: %s s per variant (also measured at %s s).\n' "$BUDGET" "$budgets"
     group "transmittance estimator (shadow and excitation rays)" '^transmittance' transmittance
     group "fluorescence estimator" '^(fluorescence|excitation|Q)' fluorescence "fluorescence total"
+    group "camera paths through glass to area lights" '^direct_light' direct_light "total fluorescence"
     group "wavelengths per path" '^wavelengths' wavelengths
     group "camera wavelengths: the scene's mixture (default) or the eye's density" '^camera_wavelengths' camera_wavelengths "total fluorescence"
     group "skipping unneeded work" '^skips' skips
@@ -281,7 +289,9 @@ from a photon grid traced before the first pass instead of excitation rays
 its time) and, in scenes with glass, the excitation rays stopped at glass
 (\`excitation_through_glass=block\`) or crossing it straight weighted by Fresnel transmission
 (\`excitation_through_glass=fresnel\`, an approximation) instead of solving for the refracted
-paths; wavelengths per
+paths; in scenes with glass, camera paths connected through it to area lights too
+(\`direct_light_through_glass=all\`, by the straight line's solve) and that with photons
+(\`excitation_estimate=photons+direct=all\`); wavelengths per
 path (\`--wavelengths\`); the camera's wavelengths drawn from the eye's density alone instead of the
 scene's mixture of it with the lights' spectra and the pigments' re-emission
 (\`camera_wavelengths=visible\`, \`--set render.camera_wavelengths=visible\`); and the renderer's skips of unneeded work
