@@ -37,9 +37,6 @@ bool leg_reaches_face(const Scene& scene, Ray ray, float dist, const ChainFace& 
   return false;
 }
 
-bool is_dielectric(const Scene& scene, const ShapeBinding& b) {
-  return b.material >= 0 && std::holds_alternative<Dielectric>(scene.materials[b.material]);
-}
 // Appends a face, keeping planar_parallel up to date.
 void append_face(const Scene& scene, const ChainFace& f, SpecularChain* c) {
   if (f.reflect || !scene.geometry.flat_face(f.shape_id, f.prim_id)) c->planar_parallel = false;
@@ -49,7 +46,7 @@ void append_face(const Scene& scene, const ChainFace& f, SpecularChain* c) {
 // Appends the hit's face to the chain; false when the surface is opaque (not a
 // dielectric) or the chain is full.
 bool append_dielectric_face(const Scene& scene, const SurfaceHit& hit, SpecularChain* c) {
-  if (!is_dielectric(scene, scene.shapes[hit.shape_id]) || c->count == kMaxSpecularChain) return false;
+  if (!scene.is_dielectric(scene.shapes[hit.shape_id]) || c->count == kMaxSpecularChain) return false;
   append_face(scene, ChainFace{hit.shape_id, hit.prim_id, hit.ng, dot(hit.ng, hit.p), hit.p}, c);
   return true;
 }
@@ -281,7 +278,7 @@ std::optional<SpecularChain> specular_seed_chain(const Scene& scene, const Vec3&
       ray = scene.geometry.spawn_ray(*hit, ray.d);
       continue;
     }
-    if (!is_dielectric(scene, b) || c.count == kMaxSpecularChain) return std::nullopt;
+    if (!scene.is_dielectric(b) || c.count == kMaxSpecularChain) return std::nullopt;
     // As the glass scatters: reflected with probability R (1 under total internal reflection).
     const Vec3 wo = -ray.d;
     const float eta = ior_at(dielectric_of(scene, hit->shape_id), lambda_nm);

@@ -162,14 +162,18 @@ struct Scene {
   bool track_by_transmittance(int medium) const { return medium_policy[medium].track_by_transmittance; }
   TransmittanceEstimator transmittance_estimator(int medium) const { return medium_policy[medium].estimator; }
 
+  // A shape whose material is a smooth dielectric (glass, a liquid's surface).
+  bool is_dielectric(const ShapeBinding& b) const {
+    return b.material >= 0 && std::holds_alternative<Dielectric>(materials[size_t(b.material)]);
+  }
+
   // Fills the records resolved once at load: medium_policy from the settings,
   // media and fluorescence, dielectric_shapes from the shapes' materials (the
   // loader calls it last; call it again after changing any of them).
   void resolve_at_load() {
     dielectric_shapes.clear();
     for (size_t s = 0; s < shapes.size(); ++s)
-      if (shapes[s].material >= 0 && std::holds_alternative<Dielectric>(materials[size_t(shapes[s].material)]))
-        dielectric_shapes.push_back(int(s));
+      if (is_dielectric(shapes[s])) dielectric_shapes.push_back(int(s));
     medium_policy.assign(media.size(), MediumPolicy{});
     for (size_t m = 0; m < media.size(); ++m) {
       MediumPolicy& p = medium_policy[m];
