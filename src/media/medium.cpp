@@ -64,6 +64,20 @@ Medium::Medium(MediumDesc desc) : desc_(std::move(desc)) {
     grids.push_back(c.grid);
   }
   if (channels_.size() == 1 && channels_[0].same_space) single_grid_ = channels_[0].grid;
+  // The majorant grid covers every grid's support at the first grid's voxels: grids
+  // placed apart (one read in another length unit is 1000 times larger) would need
+  // one too large to build. Say so by name rather than fail to allocate it.
+  const Vec3 span = grid_region()->index_bounds.diagonal();
+  const double smallest_cell = kMajorantCellSizes.front();
+  const double majorant_bytes = (double(span.x) / smallest_cell + 1) * (double(span.y) / smallest_cell + 1) *
+                                (double(span.z) / smallest_cell + 1) * 3.0 * double(channels_.size()) * sizeof(float);
+  if (!(majorant_bytes < kMaxMajorantBytes))
+    throw InputError(where, "grids",
+                     fmt::format("{:.3g} x {:.3g} x {:.3g} voxels of its first grid", span.x, span.y, span.z),
+                     fmt::format("the medium's grids together span too much for their majorant grid ({:.3g} GB): "
+                                 "are they placed apart, or read in different length units (each grid's "
+                                 "\"length_unit\")?",
+                                 majorant_bytes / 1e9));
   if (desc_.majorant_voxels_per_cell > 0) {
     majorants_ = MajorantGrid(grids, desc_.majorant_voxels_per_cell, desc_.interpolation);
     return;

@@ -37,8 +37,10 @@ namespace chlorovdb {
 // = 0): the one with the least tracking work for the medium's optical thickness, since
 // finer cells bound sigma_t more tightly (fewer null collisions) but cost more segments.
 inline constexpr std::array<int, 5> kMajorantCellSizes{4, 6, 8, 12, 16};
-// The work of one majorant segment, in collisions (docs/performance.md, session 5).
+// The work of one majorant segment, in collisions (docs/performance.md).
 inline constexpr float kSegmentCostInCollisions = 0.8f;
+// The largest majorant grid a medium builds (its grids' span at the smallest cell).
+inline constexpr double kMaxMajorantBytes = 4.0 * (1ull << 30);
 
 // A scalar field: a grid, or a constant everywhere.
 struct Field {

@@ -198,18 +198,34 @@ TEST(RenderCli, PhotonRenderReportsItsGridsError) {
   EXPECT_NEAR(fine / coarse, 0.5, 0.05);
 }
 
-// The loader's doubts reach the user: a photon render of the leaf, whose pigment is a
-// thin shell in its grid's box, warns that the photon grid's cells average over it.
+// The loader's doubts reach the user: the leaf's grid read in millimetres instead of
+// its metres is a thousand times too small, and `render` says so.
 TEST(RenderCli, PrintsTheScenesWarnings) {
   const TestDir dir;
   const std::string scene = (std::filesystem::path(CHLOROVDB_SOURCE_DIR) / "scenes/leaf_D65.json").string();
   const auto r = run({kExe, "render", scene, "-o", (dir / "leaf.exr").string(), "--resolution", "4x3", "--spp", "1",
-                      "--threads", "1", "--set", "render.excitation_estimate=photons", "--set",
-                      "render.excitation_photons=4096"},
+                      "--threads", "1", "--set", "media.leaf.pigments[0].grid.length_unit=mm", "--set",
+                      "media.leaf.scattering.coefficient.length_unit=mm"},
                      dir / "leaf.log");
   EXPECT_EQ(r.status, 0) << r.output;
   EXPECT_NE(r.output.find("warning: "), std::string::npos) << r.output;
-  EXPECT_NE(r.output.find("holds its pigment in a grid"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("check the grid's length unit"), std::string::npos) << r.output;
+}
+
+// Only the pigment's grid in millimetres: the leaf's two grids (the same file, read
+// in two units) are then placed a thousand-fold apart, and one majorant grid over
+// both cannot be built. The error names the medium and the key to check.
+TEST(RenderCli, GridsOfOneMediumInDifferentLengthUnitsAreAnInputError) {
+  const TestDir dir;
+  const std::string scene = (std::filesystem::path(CHLOROVDB_SOURCE_DIR) / "scenes/leaf_D65.json").string();
+  const auto r = run({kExe, "render", scene, "-o", (dir / "leaf.exr").string(), "--resolution", "4x3", "--spp", "1",
+                      "--threads", "1", "--set", "media.leaf.pigments[0].grid.length_unit=mm"},
+                     dir / "leaf.log");
+  EXPECT_NE(r.status, 0) << r.output;
+  EXPECT_EQ(r.output.find("internal error"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("media.leaf"), std::string::npos) << r.output;
+  EXPECT_NE(r.output.find("length_unit"), std::string::npos) << r.output;
+  EXPECT_FALSE(std::filesystem::exists(dir / "leaf.exr"));
 }
 
 // `render --set` edits the scene in memory: a scene in a read-only folder renders,
