@@ -15,8 +15,8 @@ int ExcitationGrid::bin_of(float lambda_nm) {
 
 float ExcitationGrid::bin_center(int bin) { return kLambdaMinUV + (float(bin) + 0.5f) * kBinWidth; }
 
-ExcitationGrid::ExcitationGrid(const Bounds3& region, const std::array<int, 3>& cells)
-    : region_(region), n_(cells) {
+ExcitationGrid::ExcitationGrid(const Bounds3& region, const std::array<int, 3>& cells, Measure measure)
+    : region_(region), n_(cells), measure_(measure) {
   const Vec3 d = region.diagonal();
   cell_size_ = Vec3{d.x / float(n_[0]), d.y / float(n_[1]), d.z / float(n_[2])};
   medium_volume_.assign(size_t(n_[0]) * size_t(n_[1]) * size_t(n_[2]), 0.f);
@@ -33,54 +33,40 @@ Vec3 ExcitationGrid::cell_center(const std::array<int, 3>& c) const {
                            (float(c[2]) + 0.5f) * cell_size_.z};
 }
 
-// Amanatides–Woo traversal over the cells the segment a→b crosses.
-template <typename F>
-void ExcitationGrid::for_each_cell(const Vec3& a, const Vec3& b, F add) const {
-  const float length = distance(a, b);
-  if (!(length > 0.f)) return;
-  const Ray ray{a, (b - a) / length};
-  float t0, t1;
-  if (!intersect_bounds(region_, ray, length, &t0, &t1)) return;
-  const Vec3 start = ray.at(t0 + 1e-4f * (t1 - t0));  // inside the first cell, not on its face
-  std::array<int, 3> cell{}, step{};
-  std::array<float, 3> t_next{}, t_delta{};
-  for (int k = 0; k < 3; ++k) {
-    cell[k] = std::clamp(int((start[k] - region_.lo[k]) / cell_size_[k]), 0, n_[k] - 1);
-    const float dk = ray.d[k];
-    if (dk > 0.f) {
-      step[k] = 1;
-      t_next[k] = (region_.lo[k] + float(cell[k] + 1) * cell_size_[k] - ray.o[k]) / dk;
-      t_delta[k] = cell_size_[k] / dk;
-    } else if (dk < 0.f) {
-      step[k] = -1;
-      t_next[k] = (region_.lo[k] + float(cell[k]) * cell_size_[k] - ray.o[k]) / dk;
-      t_delta[k] = -cell_size_[k] / dk;
-    } else {
-      step[k] = 0;
-      t_next[k] = kInfinity;
-      t_delta[k] = kInfinity;
-    }
-  }
-  float t = t0;
-  while (t < t1) {
-    const int k = t_next[0] < t_next[1] ? (t_next[0] < t_next[2] ? 0 : 2) : (t_next[1] < t_next[2] ? 1 : 2);
-    const float t_exit = std::min(t_next[k], t1);
-    if (t_exit > t)
-      add(size_t(cell_index(cell[0], cell[1], cell[2])), t_exit - t, ray.at(0.5f * (t + t_exit)) - cell_center(cell));
-    t = t_exit;
-    cell[k] += step[k];
-    if (cell[k] < 0 || cell[k] >= n_[k]) break;
-    t_next[k] += t_delta[k];
-  }
+Vec3 ExcitationGrid::cell_center(size_t cell) const {
+  const int ix = int(cell % size_t(n_[0])), iy = int(cell / size_t(n_[0]) % size_t(n_[1])),
+            iz = int(cell / (size_t(n_[0]) * size_t(n_[1])));
+  return cell_center(std::array<int, 3>{ix, iy, iz});
+}
+
+size_t ExcitationGrid::cell_of(const Vec3& x) const {
+  std::array<int, 3> c{};
+  for (int k = 0; k < 3; ++k) c[k] = std::clamp(int((x[k] - region_.lo[k]) / cell_size_[k]), 0, n_[k] - 1);
+  return size_t(cell_index(c[0], c[1], c[2]));
+}
+
+Bounds3 ExcitationGrid::cell_bounds(size_t cell) const {
+  const Vec3 c = cell_center(cell);
+  return Bounds3{c - 0.5f * cell_size_, c + 0.5f * cell_size_};
 }
 
 void ExcitationGrid::deposit(const Vec3& a, const Vec3& b, int bin, float value_per_length) {
   if (!(value_per_length > 0.f)) return;
-  for_each_cell(a, b, [&](size_t cell, float length, const Vec3& mid) {
-    const float tally = value_per_length * length;
-    values_[cell * kBins + size_t(bin)] += tally;
-    tally_moment_[cell] += tally * mid;
+  const Vec3 d = chlorovdb::normalize(b - a);
+  for_each_cell(a, b, [&](size_t cell, float t0, float t1) {
+    tally(cell, bin, value_per_length * (t1 - t0), a + (0.5f * (t0 + t1)) * d);
   });
+}
+
+void ExcitationGrid::add_pigment_amount(const Vec3& x, float amount, const Vec3& half) {
+  if (!(amount > 0.f)) return;
+  const size_t cell = cell_of(x);
+  const Vec3 offset = x - cell_center(cell);
+  medium_volume_[cell] += amount;
+  medium_moment_[cell] += amount * offset;
+  medium_spread_[cell] += amount * (mul(offset, offset) + mul(half, half) / 3.f);
+  medium_lo_[cell] = min(medium_lo_[cell], offset - half);
+  medium_hi_[cell] = max(medium_hi_[cell], offset + half);
 }
 
 void ExcitationGrid::add_medium_volume(const Vec3& a, const Vec3& b, float cross_section) {
@@ -88,7 +74,9 @@ void ExcitationGrid::add_medium_volume(const Vec3& a, const Vec3& b, float cross
   const float total = length(d);
   if (!(total > 0.f)) return;
   const Vec3 dir = d / total;
-  for_each_cell(a, b, [&](size_t cell, float length, const Vec3& mid) {
+  for_each_cell(a, b, [&](size_t cell, float t0, float t1) {
+    const float length = t1 - t0;
+    const Vec3 mid = a + (0.5f * (t0 + t1)) * dir - cell_center(cell);
     const float volume = cross_section * length;
     medium_volume_[cell] += volume;
     medium_moment_[cell] += volume * mid;
@@ -137,8 +125,16 @@ void ExcitationGrid::normalize(double photons) {
   profiles_.assign(medium_volume_.size(), Profile{Vec3(0.f), Vec3(0.f)});
   for (size_t c = 0; c < medium_volume_.size(); ++c) {
     // A cell the lines found no medium in but a photon did (a sliver between
-    // lines) is taken as full: its tally is small either way.
-    const double volume = medium_volume_[c] > 0.f ? std::min(double(medium_volume_[c]), cell) : cell;
+    // lines) is taken as full: its tally is small either way. A cell holding no
+    // pigment (Measure::amount) reads 0.
+    const double volume = measure_ == Measure::amount ? double(medium_volume_[c])
+                          : medium_volume_[c] > 0.f   ? std::min(double(medium_volume_[c]), cell)
+                                                      : cell;
+    if (!(volume > 0.0)) {
+      std::fill_n(values_.begin() + long(c * kBins), kBins, 0.f);
+      if (c < errors_.size()) errors_[c] = 0.f;
+      continue;
+    }
     // The profile 1 + g·(x − μ): with T the tally and V, m, s the medium's volume
     // and moments about the centre, μ = m/V and, per axis, g = (T₁/T − μ) / (s/V − μ²):
     // the tally's centroid offset over the medium's variance.
@@ -167,14 +163,12 @@ void ExcitationGrid::normalize(double photons) {
 
 ExcitationGrid::Lookup ExcitationGrid::at(const Vec3& x) const {
   if (values_.empty() || !region_.contains(x)) return {};
-  std::array<int, 3> c{};
-  for (int k = 0; k < 3; ++k) c[k] = std::clamp(int((x[k] - region_.lo[k]) / cell_size_[k]), 0, n_[k] - 1);
-  const size_t cell = size_t(cell_index(c[0], c[1], c[2]));
+  const size_t cell = cell_of(x);
   if (profiles_.empty()) return {&values_[cell * kBins], 1.f};
   const Profile& p = profiles_[cell];
   // Non-negative by the limiter within the medium's measured extent; beyond it
   // (between the lines that measured it) the zero guards a steep slope.
-  return {&values_[cell * kBins], std::max(1.f + dot(p.gradient, x - cell_center(c) - p.centroid), 0.f)};
+  return {&values_[cell * kBins], std::max(1.f + dot(p.gradient, x - cell_center(cell) - p.centroid), 0.f)};
 }
 
 }  // namespace chlorovdb

@@ -24,7 +24,15 @@
 // fall, or few photons' noise) the slope is scaled down until its lowest value
 // there is zero (a slope limiter, as in MUSCL schemes): clamping at zero instead
 // raised the cell's average, a bias of up to +6 % at low photon counts.
+//
+// A pigment held in a grid (a leaf's 0.2 mm blade in its grid's box, a spill)
+// fills part of a cell: the fluence its events need is the one inside the
+// pigment, so there every tally is weighted by the concentration (value =
+// ∫ c·λ'·ε·Φ dV / ∫ c dV; Measure::amount) and the moments are the pigment's,
+// not the medium's volume's. Weighted by volume, the leaf's cells read the
+// unattenuated light around its blade: +46 %.
 // Consistent, not unbiased.
+#include <algorithm>
 #include <array>
 #include <vector>
 
@@ -42,8 +50,14 @@ class ExcitationGrid {
   static int bin_of(float lambda_nm);
   static float bin_center(int bin);
 
+  // What a cell's tallies are averaged over: the volume the medium fills in it (a
+  // pigment of constant concentration), or the amount of pigment in it, ∫ c dV in
+  // mol/L·m³ (a pigment held in a grid, whose tallies are weighted by c).
+  enum class Measure { volume, amount };
+
   ExcitationGrid() = default;
-  ExcitationGrid(const Bounds3& region, const std::array<int, 3>& cells);
+  ExcitationGrid(const Bounds3& region, const std::array<int, 3>& cells, Measure measure = Measure::volume);
+  Measure measure() const { return measure_; }
 
   bool empty() const { return values_.empty(); }
   const Bounds3& region() const { return region_; }
@@ -51,14 +65,34 @@ class ExcitationGrid {
 
   // Adds value_per_length × (the length of segment a→b inside each cell) to `bin`.
   void deposit(const Vec3& a, const Vec3& b, int bin, float value_per_length);
+  // The same weighted by a concentration field (Measure::amount): each piece y0→y1
+  // of a→b in a cell adds value_per_length × line(y0, y1).integral, where `line`
+  // returns an unbiased estimate of ∫ c along the piece (m·mol/L) and the point whose
+  // offset stands for the piece in the first moment (the point the estimate looked
+  // c up at: the estimate times it is unbiased for ∫ c·x along the piece).
+  struct LineIntegral {
+    float integral = 0.f;
+    Vec3 at;
+  };
+  template <typename Line>
+  void deposit_weighted(const Vec3& a, const Vec3& b, int bin, float value_per_length, Line&& line);
   // Adds the volume a line segment a→b inside the medium stands for: its length in
   // each cell times the cross-section each such line represents, m².
   void add_medium_volume(const Vec3& a, const Vec3& b, float cross_section);
+  // Adds `amount` of pigment (Measure::amount: c·dV, mol/L·m³) spread evenly over
+  // the box x ± half (per axis), to the cell holding x.
+  void add_pigment_amount(const Vec3& x, float amount, const Vec3& half);
+  // The cell holding x (x clamped into the region) and a cell's bounds.
+  size_t cell_of(const Vec3& x) const;
+  Bounds3 cell_bounds(size_t cell) const;
+  // What add_medium_volume / add_pigment_amount have added to a cell (before normalize()).
+  float medium_measure(size_t cell) const { return medium_volume_[cell]; }
   // Element-wise sum of the tallies (per-chunk grids into one).
   void add(const ExcitationGrid& other);
-  // Tallies to values: divided by `photons` and by the medium's volume in each cell
-  // (the whole cell's where no medium volume was measured); the moments to each
-  // cell's linear profile.
+  // Tallies to values: divided by `photons` and by the medium's measure in each
+  // cell (Measure::volume: the whole cell's where no medium volume was measured;
+  // Measure::amount: a cell holding no pigment reads 0); the moments to each cell's
+  // linear profile.
   void normalize(double photons);
   // The kBins values of the cell holding x (its averages over the medium's part;
   // nullptr outside the region) and the cell's linear profile at x, their factor.
@@ -84,16 +118,23 @@ class ExcitationGrid {
  private:
   int cell_index(int ix, int iy, int iz) const { return (iz * n_[1] + iy) * n_[0] + ix; }
   Vec3 cell_center(const std::array<int, 3>& c) const;
+  Vec3 cell_center(size_t cell) const;
   Bounds3 region_;
   std::array<int, 3> n_{};
   Vec3 cell_size_;
-  // add(index, length, midpoint minus the cell's centre) for every piece of a→b in a cell.
+  Measure measure_ = Measure::volume;
+  // add(index, t0, t1) for every piece [t0, t1] of a + t·(b − a)/|b − a| inside one cell.
   template <typename F>
   void for_each_cell(const Vec3& a, const Vec3& b, F add) const;
+  // Adds a tally to a bin, and its first moment about the cell's centre at y.
+  void tally(size_t cell, int bin, float value, const Vec3& y) {
+    values_[cell * kBins + size_t(bin)] += value;
+    tally_moment_[cell] += value * (y - cell_center(cell));
+  }
   std::vector<float> values_;         // cells × kBins
-  std::vector<float> medium_volume_;  // per cell, m³
+  std::vector<float> medium_volume_;  // per cell, the medium's measure: m³, or mol/L·m³ (Measure::amount)
   // Per cell, about its centre: the tally's first moment (all bins) and the
-  // medium's first and (per-axis) second moments.
+  // medium's (or pigment's) first and (per-axis) second moments.
   std::vector<Vec3> tally_moment_, medium_moment_, medium_spread_;
   std::vector<Vec3> medium_lo_, medium_hi_;  // per cell, the medium's extent about the centre (the limiter's)
   // Per cell, from normalize(): the profile's centroid μ (about the centre) and
@@ -105,5 +146,55 @@ class ExcitationGrid {
   std::vector<float> errors_;         // per cell: standard error of cell_total
   float relative_error_ = 0.f;
 };
+
+// Amanatides–Woo traversal over the cells the segment a→b crosses.
+template <typename F>
+void ExcitationGrid::for_each_cell(const Vec3& a, const Vec3& b, F add) const {
+  const float length = distance(a, b);
+  if (!(length > 0.f)) return;
+  const Ray ray{a, (b - a) / length};
+  float t0, t1;
+  if (!intersect_bounds(region_, ray, length, &t0, &t1)) return;
+  const Vec3 start = ray.at(t0 + 1e-4f * (t1 - t0));  // inside the first cell, not on its face
+  std::array<int, 3> cell{}, step{};
+  std::array<float, 3> t_next{}, t_delta{};
+  for (int k = 0; k < 3; ++k) {
+    cell[k] = std::clamp(int((start[k] - region_.lo[k]) / cell_size_[k]), 0, n_[k] - 1);
+    const float dk = ray.d[k];
+    if (dk > 0.f) {
+      step[k] = 1;
+      t_next[k] = (region_.lo[k] + float(cell[k] + 1) * cell_size_[k] - ray.o[k]) / dk;
+      t_delta[k] = cell_size_[k] / dk;
+    } else if (dk < 0.f) {
+      step[k] = -1;
+      t_next[k] = (region_.lo[k] + float(cell[k]) * cell_size_[k] - ray.o[k]) / dk;
+      t_delta[k] = -cell_size_[k] / dk;
+    } else {
+      step[k] = 0;
+      t_next[k] = kInfinity;
+      t_delta[k] = kInfinity;
+    }
+  }
+  float t = t0;
+  while (t < t1) {
+    const int k = t_next[0] < t_next[1] ? (t_next[0] < t_next[2] ? 0 : 2) : (t_next[1] < t_next[2] ? 1 : 2);
+    const float t_exit = std::min(t_next[k], t1);
+    if (t_exit > t) add(size_t(cell_index(cell[0], cell[1], cell[2])), t, t_exit);
+    t = t_exit;
+    cell[k] += step[k];
+    if (cell[k] < 0 || cell[k] >= n_[k]) break;
+    t_next[k] += t_delta[k];
+  }
+}
+
+template <typename Line>
+void ExcitationGrid::deposit_weighted(const Vec3& a, const Vec3& b, int bin, float value_per_length, Line&& line) {
+  if (!(value_per_length > 0.f)) return;
+  const Vec3 d = chlorovdb::normalize(b - a);
+  for_each_cell(a, b, [&](size_t cell, float t0, float t1) {
+    const LineIntegral l = line(a + t0 * d, a + t1 * d);
+    if (l.integral > 0.f) tally(cell, bin, value_per_length * l.integral, l.at);
+  });
+}
 
 }  // namespace chlorovdb

@@ -26,6 +26,34 @@ constexpr int kChunks = 8;
 // Far enough to leave any region a flight in an unbounded medium could cross.
 constexpr float kFarAway = 1e6f;
 
+// An unbiased estimate of ∫ c_k along y0→y1 (m·mol/L) from one lookup, at a point
+// drawn in proportion to the majorant grid's bound on c_k: a pigment that fills a
+// sliver of the segment (a leaf's blade in a photon cell) is found by every draw,
+// where a point drawn uniformly found it in a few per cent of them.
+ExcitationGrid::LineIntegral pigment_along(const Medium& m, int k, const Vec3& y0, const Vec3& y1, float u) {
+  const float length = distance(y0, y1);
+  if (!(length > 0.f)) return {};
+  const Ray ray_index = m.index_ray(Ray{y0, y1 - y0});  // t in [0, 1] from y0 to y1
+  double total = 0;  // ∫ c_max dt
+  for (MajorantIterator it = m.majorants(ray_index, 1.f); const auto s = it.next();)
+    total += double(m.pigment_concentration_max(*s, k)) * (s->t_max - s->t_min);
+  if (!(total > 0.0)) return {};
+  double target = double(u) * total;
+  for (MajorantIterator it = m.majorants(ray_index, 1.f); const auto s = it.next();) {
+    const double c_max = m.pigment_concentration_max(*s, k), share = c_max * (s->t_max - s->t_min);
+    if (!(share > 0.0)) continue;
+    if (target >= share) {
+      target -= share;
+      continue;
+    }
+    const float t = s->t_min + float(target / c_max);
+    const Vec3 y = y0 + t * (y1 - y0);
+    const float c = m.pigment_concentration(m.channel_values(ray_index.at(t)), k);
+    return {float(double(length) * total * c / c_max), y};
+  }
+  return {};  // rounding left the target past the last segment: a measure-zero miss
+}
+
 // One photon of pigment fp (in `medium`) from its lights, adding its flights
 // through `medium` to `grid`. Absorbed by fp, it is re-emitted (weight Q, λ from
 // `emission`, isotropic) and goes on: the pigment's own fluorescence excites it
@@ -90,7 +118,13 @@ void trace_photon(const Scene& scene, int medium, const FluorescentPigment& fp, 
                    });
       if (current == medium) {
         const Vec3 end = absorbed || scattered ? collision : ray.at(std::min(t_end, kFarAway));
-        grid.deposit(ray.o, end, bin, w * per_length);
+        if (grid.measure() == ExcitationGrid::Measure::amount) {
+          grid.deposit_weighted(ray.o, end, bin, w * per_length, [&](const Vec3& y0, const Vec3& y1) {
+            return pigment_along(scene.media[size_t(medium)], fp.pigment, y0, y1, rng.uniform());
+          });
+        } else {
+          grid.deposit(ray.o, end, bin, w * per_length);
+        }
       }
       if (absorbed && by_pigment && emission.can_excite()) {
         // Re-emission: photons out per photon in is Q·r(λ', λ) f(λ) per nm, so the
@@ -171,6 +205,119 @@ void measure_medium_volume(const Scene& scene, int medium, ExcitationGrid& grid,
     }
 }
 
+// One axis of a voxel's interpolation kernel (the tent 1 − |u| over |u| < 1, or
+// the box over |u| < 1/2; u in voxels from the centre) cut at its centre and at
+// the faces of the grid's cells: each part's share of the kernel's mass, its
+// centroid and half-width, in voxels about the centre.
+struct KernelPart {
+  float share, centroid, half;
+};
+// `cuts`: the cells' faces (any); the kernel's ends and centre are added to them.
+void split_kernel(bool trilinear, std::vector<float>& cuts, std::vector<KernelPart>& parts) {
+  const float r = trilinear ? 1.f : 0.5f;
+  std::erase_if(cuts, [&](float f) { return !(f > -r && f < r); });
+  cuts.insert(cuts.end(), {-r, 0.f, r});
+  std::sort(cuts.begin(), cuts.end());
+  parts.clear();
+  for (size_t i = 0; i + 1 < cuts.size(); ++i) {
+    const double a = cuts[i], b = cuts[i + 1];
+    if (!(b > a)) continue;
+    // ∫ φ and ∫ u φ over [a, b], on one side of the centre: φ = 1 ∓ u for the tent.
+    const double side = a < 0.0 ? 1.0 : -1.0;
+    const double mass = trilinear ? (b - a) + side * (b * b - a * a) / 2 : (b - a) / (2.0 * r);
+    const double moment =
+        trilinear ? (b * b - a * a) / 2 + side * (b * b * b - a * a * a) / 3 : (b * b - a * a) / (4.0 * r);
+    if (mass > 0.0) parts.push_back({float(mass), float(moment / mass), float(0.5 * (b - a))});
+  }
+}
+
+// The amount of pigment k, held in a grid, in each cell of `grid` (Measure::amount),
+// ∫ c dV over the medium: every voxel's value times its volume, split by its
+// interpolation kernel over the cells its support reaches (exactly, per axis,
+// for a grid whose axes are the world's), so each cell gets the integral of the
+// interpolated c the photons' tallies read: a cell with a sliver of a voxel's
+// fringe must get that sliver, or its tallies are divided by too little. Where the
+// lines (`volume`, Measure::volume) found a cell only partly in the medium, a part
+// counts only if its centroid is in the medium: a spill's bottom voxels are centred
+// on the floor, half their tent under it, where no photon goes (counting them
+// whole read 6 % too bright). A rotated grid's voxels are split into their octants instead.
+void measure_pigment_amount(const Scene& scene, int medium, int k, const ExcitationGrid& volume,
+                            ExcitationGrid& grid) {
+  const Medium& m = scene.media[size_t(medium)];
+  const Field& field = m.desc().pigments[size_t(k)].concentration;
+  const VoxelGrid& voxels = *field.grid;
+  const Transform& world = voxels.world_from_index();
+  const std::array<Vec3, 3> axis{world.vector({1.f, 0.f, 0.f}), world.vector({0.f, 1.f, 0.f}),
+                                 world.vector({0.f, 0.f, 1.f})};
+  const float voxel_volume = std::abs(dot(axis[0], cross(axis[1], axis[2])));
+  bool aligned = true;
+  for (int a = 0; a < 3; ++a)
+    for (int w = 0; w < 3; ++w) aligned = aligned && (a == w) == (axis[size_t(a)][w] != 0.f);
+  const Vec3 reach = abs(axis[0]) + abs(axis[1]) + abs(axis[2]);  // world half-extent of an index half-width of 1
+  const bool trilinear = m.desc().interpolation == Interpolation::trilinear;
+  const float support = support_radius(m.desc().interpolation);
+  // A uniform box with the kernel's variance per axis: tent 1/6 voxel², box 1/12.
+  const Vec3 spread = reach * (trilinear ? std::sqrt(0.5f) : 0.5f);
+  const float full_cell = 0.99f * grid.cell_volume();
+  auto add_part = [&](const Vec3& x, float amount, const Vec3& half) {
+    if (!grid.region().contains(x)) return;
+    if (volume.medium_measure(grid.cell_of(x)) < full_cell && medium_at(scene, x) != medium) return;
+    grid.add_pigment_amount(x, amount, half);
+  };
+  const Vec3 diagonal{axis[0].x, axis[1].y, axis[2].z};  // an aligned grid's voxel edges (signed)
+  const Bounds3& region = grid.region();
+  const Vec3 cell_size = grid.cell_bounds(0).diagonal();
+  std::array<std::vector<KernelPart>, 3> parts;
+  std::vector<float> faces;
+  constexpr int kBlock = 32;
+  std::vector<float> block(size_t(kBlock) * kBlock * kBlock);
+  const Coord lo = voxels.index_lo(), hi = voxels.index_hi();
+  for (int bz = lo[2]; bz <= hi[2]; bz += kBlock)
+    for (int by = lo[1]; by <= hi[1]; by += kBlock)
+      for (int bx = lo[0]; bx <= hi[0]; bx += kBlock) {
+        const Coord b_lo{bx, by, bz}, b_hi{std::min(bx + kBlock - 1, hi[0]), std::min(by + kBlock - 1, hi[1]),
+                                           std::min(bz + kBlock - 1, hi[2])};
+        voxels.copy_block(b_lo, b_hi, block.data());
+        const float* value = block.data();
+        for (int z = b_lo[2]; z <= b_hi[2]; ++z)
+          for (int y = b_lo[1]; y <= b_hi[1]; ++y)
+            for (int x = b_lo[0]; x <= b_hi[0]; ++x) {
+              const float amount = *value++ * field.scale * voxel_volume;
+              if (!(amount > 0.f)) continue;
+              const Vec3 index{float(x), float(y), float(z)};
+              const Vec3 center = world.point(index);
+              const size_t cell = grid.cell_of(center);
+              const Bounds3 bounds = grid.cell_bounds(cell);
+              if (volume.medium_measure(cell) >= full_cell && bounds.contains(center - support * reach) &&
+                  bounds.contains(center + support * reach)) {
+                grid.add_pigment_amount(center, amount, spread);
+                continue;
+              }
+              if (!aligned) {
+                const float o = trilinear ? 1.f / 3.f : 0.25f;  // the octants' centroids
+                for (int octant = 0; octant < 8; ++octant)
+                  add_part(world.point(index + Vec3{octant & 1 ? o : -o, octant & 2 ? o : -o, octant & 4 ? o : -o}),
+                           0.125f * amount, 0.5f * spread);
+                continue;
+              }
+              for (int a = 0; a < 3; ++a) {
+                // The cells' faces within the support, in voxels from the centre.
+                const float w0 = center[a] - support * reach[a], w1 = center[a] + support * reach[a];
+                faces.clear();
+                for (int j = int(std::floor((w0 - region.lo[a]) / cell_size[a])) + 1;
+                     region.lo[a] + float(j) * cell_size[a] < w1; ++j)
+                  faces.push_back((region.lo[a] + float(j) * cell_size[a] - center[a]) / diagonal[a]);
+                split_kernel(trilinear, faces, parts[size_t(a)]);
+              }
+              for (const KernelPart& px : parts[0])
+                for (const KernelPart& py : parts[1])
+                  for (const KernelPart& pz : parts[2])
+                    add_part(center + mul(Vec3{px.centroid, py.centroid, pz.centroid}, diagonal),
+                             amount * px.share * py.share * pz.share, mul(Vec3{px.half, py.half, pz.half}, reach));
+            }
+      }
+}
+
 // The standard error of each cell's summed tally from the independent chunks:
 // the variance of a sum of K chunk tallies is K times their sample variance.
 std::vector<float> tally_errors_from_chunks(const std::vector<ExcitationGrid>& chunks) {
@@ -203,7 +350,10 @@ ExcitationGrid trace_pigment(const Scene& scene, int medium, int k, const Photon
   // its thin axes: a leaf or a spill is a thin layer, and its fluence falls across it.
   std::array<int, 3> cells = cell_counts(region, std::max(1, tracing.cells_per_axis));
   for (int& n : cells) n = std::max(n, std::min(8, tracing.cells_per_axis));
-  std::vector<ExcitationGrid> chunks(kChunks, ExcitationGrid(region, cells));
+  // A pigment held in a grid fills part of its medium: its tallies are weighted by concentration.
+  const bool in_grid = scene.media[size_t(medium)].pigment_in_grid(fp.pigment);
+  std::vector<ExcitationGrid> chunks(
+      kChunks, ExcitationGrid(region, cells, in_grid ? ExcitationGrid::Measure::amount : ExcitationGrid::Measure::volume));
   // Re-emitted wavelengths: ∝ the emission spectrum (times λ; the weight corrects for it).
   const ExcitationSampler emission(fp.emission, Spectrum::constant(1.f));
   const EmissionTarget target{region.center(), 0.5f * length(region.diagonal()), tracing.aimed_share};
@@ -221,7 +371,14 @@ ExcitationGrid trace_pigment(const Scene& scene, int medium, int k, const Photon
   for (int c = 1; c < kChunks; ++c) grid.add(chunks[size_t(c)]);
   grid.set_tally_errors(std::move(errors));
   Rng lines(hash_combine(tracing.seed, hash_combine(uint64_t(medium), uint64_t(k))), 0);
-  measure_medium_volume(scene, medium, grid, lines);
+  if (in_grid) {
+    // Which cells the medium fills, for measure_pigment_amount's test of the others.
+    ExcitationGrid volume(region, cells);
+    measure_medium_volume(scene, medium, volume, lines);
+    measure_pigment_amount(scene, medium, fp.pigment, volume, grid);
+  } else {
+    measure_medium_volume(scene, medium, grid, lines);
+  }
   grid.normalize(double(tracing.photons));
   return grid;
 }

@@ -181,10 +181,7 @@ MediumProperties Medium::properties(const ChannelValues& v, const PreparedMedium
   mp.sigma_s = ms.sigma_s;
   mp.phase = ms.phase;
   const int pigments = pigment_count();
-  for (int k = 0; k < pigments; ++k) {
-    const int c = pigment_channel_[k];
-    mp.concentration[k] = c < 0 ? pigment_constant_[k] : v[c] * pigment_scale_[k];
-  }
+  for (int k = 0; k < pigments; ++k) mp.concentration[k] = pigment_concentration(v, k);
   for (int i = 0; i < prepared.lambda_count; ++i) {
     float sigma_a = prepared.sigma_a_constant[i];  // holds the constant pigments already
     for (int k = 0; k < pigments; ++k) {

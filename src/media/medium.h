@@ -169,6 +169,10 @@ class Medium {
   // follows from them, so a caller that needs several looks up once.
   using ChannelValues = std::array<float, kMaxMajorantChannels>;
   inline ChannelValues channel_values(const Vec3& p_index) const;
+  // Pigment k's concentration, mol/L, from the grids' values there.
+  float pigment_concentration(const ChannelValues& v, int k) const {
+    return pigment_channel_[k] >= 0 ? v[pigment_channel_[k]] * pigment_scale_[k] : pigment_constant_[k];
+  }
   SampledSpectrum sigma_t(const ChannelValues& v, const PreparedMedium& prepared) const {
     return prepared.sigma_t_for(v, int(channels_.size()), prepared.lambda_count);
   }

@@ -212,6 +212,19 @@ TEST(RenderCli, PrintsTheScenesWarnings) {
   EXPECT_NE(r.output.find("check the grid's length unit"), std::string::npos) << r.output;
 }
 
+// A photon render of the leaf, whose pigment is a thin blade in its grid's box,
+// warns that the photon cells cannot follow the light's fall across the blade.
+TEST(RenderCli, WarnsWhenPhotonsMeetAPigmentHeldInAGrid) {
+  const TestDir dir;
+  const std::string scene = (std::filesystem::path(CHLOROVDB_SOURCE_DIR) / "scenes/leaf_D65.json").string();
+  const auto r = run({kExe, "render", scene, "-o", (dir / "leaf.exr").string(), "--resolution", "4x3", "--spp", "1",
+                      "--threads", "1", "--set", "render.excitation_estimate=photons", "--set",
+                      "render.excitation_photons=4096"},
+                     dir / "leaf.log");
+  EXPECT_EQ(r.status, 0) << r.output;
+  EXPECT_NE(r.output.find("holds its pigment in a grid"), std::string::npos) << r.output;
+}
+
 // Only the pigment's grid in millimetres: the leaf's two grids (the same file, read
 // in two units) are then placed a thousand-fold apart, and one majorant grid over
 // both cannot be built. The error names the medium and the key to check.

@@ -1,5 +1,6 @@
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 #include "fluorescence/excitation_grid.h"
@@ -115,4 +116,31 @@ TEST(ExcitationGrid, TheSlopeLimiterKeepsTheCellsAverageAndTheProfileNonNegative
   EXPECT_NEAR(mean, 1.0, 2e-3);
   EXPECT_NEAR(g.at({0.f, 0.5f, 0.5f}).profile, 2.f, 2e-3f);
   EXPECT_NEAR(g.at({1.f - 1e-6f, 0.5f, 0.5f}).profile, 0.f, 2e-3f);
+}
+
+// A pigment held in a thin sheet across the cell (a tenth of it thick, like a
+// leaf's blade in a photon cell) under light that falls 2.8 e-folds across the
+// sheet and is unattenuated around it: tallies weighted by concentration
+// (Measure::amount) read the mean fluence inside the sheet, 0.335 of the light
+// above it; weighted by volume the cell read the light around the sheet.
+TEST(ExcitationGrid, ASheetOfPigmentReadsTheFluenceInsideIt) {
+  ExcitationGrid g(Bounds3{{0, 0, 0}, {1, 1, 1}}, {1, 1, 1}, ExcitationGrid::Measure::amount);
+  constexpr float kBottom = 0.45f, kThickness = 0.1f, kFall = 2.8f / kThickness;
+  const auto inside = [&](float z) { return z >= kBottom && z <= kBottom + kThickness; };
+  // Light from +z: 1 above the sheet, falling through it, e^-2.8 below.
+  const auto fluence = [&](float z) { return std::exp(-kFall * std::clamp(kBottom + kThickness - z, 0.f, kThickness)); };
+  constexpr int kLattice = 200;
+  constexpr float kSide = 1.f / kLattice;
+  // Lines along x on a lattice in y and z; ∫ c along each is exact (c = 2 inside).
+  for (int j = 0; j < kLattice; ++j)
+    for (int k = 0; k < kLattice; ++k) {
+      const float y = (j + 0.5f) * kSide, z = (k + 0.5f) * kSide;
+      g.deposit_weighted({0.f, y, z}, {1.f, y, z}, 0, kSide * kSide * fluence(z), [&](const Vec3& a, const Vec3& b) {
+        return ExcitationGrid::LineIntegral{inside(z) ? 2.f * distance(a, b) : 0.f, 0.5f * (a + b)};
+      });
+      if (inside(z)) g.add_pigment_amount({0.5f, y, z}, 2.f * kSide * kSide, Vec3{0.5f, 0.5f * kSide, 0.5f * kSide});
+    }
+  g.normalize(1.0);
+  const float mean = (1.f - std::exp(-2.8f)) / 2.8f;
+  EXPECT_NEAR(g.at({0.5f, 0.5f, 0.5f}).values[0], mean, 0.01f * mean);
 }
