@@ -168,3 +168,33 @@ TEST(FluorescenceGrid, PhotonCellsHoldOnlyThePigmentInsideTheMedium) {
   const double expected = kShellMicromolar * 1e-6 * (3 * kVoxel) * (3 * kVoxel) * (kShellVoxels - 0.5) * kVoxel;
   EXPECT_NEAR(amount / expected, 1.0, 1e-4);
 }
+
+// A grid whose axes are not the world's (8³ voxels of 20 µM turned 30° about z and
+// 20° about x, in the box the loader puts around it): its voxels go to the photon
+// cells as octants, and the cells hold all of its pigment, Σ c · voxel volume.
+TEST(FluorescenceGrid, PhotonCellsHoldARotatedGridsPigment) {
+  DenseGrid g({8, 8, 8}, float(kShellMicromolar));
+  g.world_from_index = Transform::rotate(30.f, {0, 0, 1}) * Transform::rotate(20.f, {1, 0, 0}) *
+                       Transform::scale(Vec3(float(kVoxel)));
+  g.metadata.name = "concentration";
+  g.metadata.unit = "uM";
+  write_concentration_grid(scratch_dir("integrator_tests") / "rotated_block.vdb", g);
+  const Scene scene = load_scene(write_scene("rotated_block", R"({
+  "render": {"resolution": [8, 8], "spp": 1, "wavelengths": 4, "fluorescence": "direct",
+             "excitation_estimate": "photons", "excitation_photons": 1024},
+  "camera": {"type": "orthographic", "position": [0, 0, 1], "look_at": [0, 0, 0], "height": 0.02},
+  "pigments": {"dye": {
+    "extinction": {"table": {"lambda": [379.999, 380, 480, 480.001], "value": [0, 20000, 20000, 0]}},
+    "quantum_yield": 0.5, "emission": {"gaussian": [650, 10]}}},
+  "media": {"block": {"solvent": "none",
+    "pigments": [{"pigment": "dye", "grid": {"file": "rotated_block.vdb", "name": "concentration", "unit": "uM"}}]}},
+  "lights": [{"type": "distant", "direction": [0, 0, -1], "spectrum": {"gaussian": [420, 8]}, "scale": 1}]
+})"));
+  prepare_excitation_grids(scene, test_seed(65));
+  const ExcitationGrid* grid = scene.excitation_grid(0, 0);
+  ASSERT_NE(grid, nullptr);
+  double amount = 0;
+  for (size_t c = 0; c < grid->cell_count(); ++c) amount += grid->medium_measure(c);
+  const double expected = kShellMicromolar * 1e-6 * 512 * kVoxel * kVoxel * kVoxel;
+  EXPECT_NEAR(amount / expected, 1.0, 1e-4);
+}
