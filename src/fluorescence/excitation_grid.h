@@ -8,22 +8,30 @@
 // cells, so a cell astride the vessel's wall is not diluted by the glass or air
 // in it; Φ the fluence, W/(m²·nm)). A fluorescence event at x with concentration c
 // then reads its absorbed "λ'·μ_a·Φ" as k·c(x)·value (k = ln 10 · 100, the
-// molar-extinction conversion) times the cell's linear profile at x.
+// molar-extinction conversion) times the cell's profile at x.
 //
 // The profile: a cell's value is an average, and a fluence that falls across
 // the cell (UV entering a strongly absorbing liquid falls e-fold within a cell or
-// two) makes the average wrong at every point, the more so where the camera's
-// events crowd toward the lit face: a bias of order the cell size. So the photons
+// two; sunlight across a leaf's 0.2 mm blade, whatever the cell) makes the average
+// wrong at every point, the more so where the camera's events crowd toward the
+// lit face: a bias of order the fluence's fall across the cell. So the photons
 // also tally the first moment of their track length about the cell's centre, and
-// the medium lines the first and second moments of the medium's own volume; in
-// each cell the linear profile 1 + g·(x − μ) (μ the medium's centroid in the cell)
-// whose first moment over the medium's part matches the tally's is the factor at
-// x. Its mean over the medium is 1, so every cell keeps its average, and it is
-// exact for a linear fluence (the remaining bias is of second order). Where the
-// slope would take it below zero within the medium's extent in the cell (a steep
-// fall, or few photons' noise) the slope is scaled down until its lowest value
-// there is zero (a slope limiter, as in MUSCL schemes): clamping at zero instead
-// raised the cell's average, a bias of up to +6 % at low photon counts.
+// the medium's measure its first and second moments (a full covariance Σ: a
+// leaf's blade crosses a cell at a slant). In each cell the profile is the
+// exponential exp(κ·(x − μ)) (μ the medium's centroid in the cell), the shape of
+// light absorbed on its way, whose first moment matches the tally's: its
+// direction is the linear fit's, g = Σ⁻¹ (T₁/T − μ), and its rate along it
+// solves the Langevin relation of an exponential over a uniform slab with the
+// medium's spread along g (the linear fit where the fall is weak; exact for a
+// Beer–Lambert fall along an axis of a filled cell). Its mean over the medium is
+// then made exactly 1 by a second pass over the medium's measure (normalize()),
+// so every cell keeps its average whatever shape the medium has in it. Bounds:
+// the slope is shrunk toward flat by its signal-to-noise ratio (the photons'
+// chunks measure the centroid's noise), and the rate times the medium's
+// half-width along it is at most 2, the exponent clamped to ± that (a profile
+// within e^±2 of its scale): unbounded, a cell holding a sliver of liquid got a
+// rate fitted to the sliver's spread and the glass scenes came out 10⁴–10⁹ times
+// too bright. The remaining bias is the fluence's departure from that shape.
 //
 // A pigment held in a grid (a leaf's 0.2 mm blade in its grid's box, a spill)
 // fills part of a cell: the fluence its events need is the one inside the
@@ -34,6 +42,7 @@
 // Consistent, not unbiased.
 #include <algorithm>
 #include <array>
+#include <functional>
 #include <vector>
 
 #include "core/constants.h"
@@ -57,11 +66,12 @@ class ExcitationGrid {
 
   ExcitationGrid() = default;
   ExcitationGrid(const Bounds3& region, const std::array<int, 3>& cells, Measure measure = Measure::volume);
-  Measure measure() const { return measure_; }
 
   bool empty() const { return values_.empty(); }
   const Bounds3& region() const { return region_; }
   const std::array<int, 3>& cells() const { return n_; }
+
+  Measure measure() const { return measure_; }
 
   // Adds value_per_length × (the length of segment a→b inside each cell) to `bin`.
   void deposit(const Vec3& a, const Vec3& b, int bin, float value_per_length);
@@ -80,20 +90,23 @@ class ExcitationGrid {
   // each cell times the cross-section each such line represents, m².
   void add_medium_volume(const Vec3& a, const Vec3& b, float cross_section);
   // Adds `amount` of pigment (Measure::amount: c·dV, mol/L·m³) spread evenly over
-  // the box x ± half (per axis), to the cell holding x.
+  // the box x ± half (per axis) inside one cell, the one holding x.
   void add_pigment_amount(const Vec3& x, float amount, const Vec3& half);
+
   // The cell holding x (x clamped into the region) and a cell's bounds.
   size_t cell_of(const Vec3& x) const;
   Bounds3 cell_bounds(size_t cell) const;
   // What add_medium_volume / add_pigment_amount have added to a cell (before normalize()).
-  float medium_measure(size_t cell) const { return medium_volume_[cell]; }
+  double medium_measure(size_t cell) const { return medium_volume_[cell]; }
   // Element-wise sum of the tallies (per-chunk grids into one).
   void add(const ExcitationGrid& other);
   // Tallies to values: divided by `photons` and by the medium's measure in each
   // cell (Measure::volume: the whole cell's where no medium volume was measured;
-  // Measure::amount: a cell holding no pigment reads 0); the moments to each cell's
-  // linear profile.
-  void normalize(double photons);
+  // Measure::amount: a cell holding no pigment reads 0), and each cell's profile
+  // fitted. `measure(grid)` adds the medium's measure (add_medium_volume or
+  // add_pigment_amount); it is called twice and must add the same both times:
+  // first for the measure and its moments, then for the profiles' normalization.
+  void normalize(double photons, const std::function<void(ExcitationGrid&)>& measure);
   // The kBins values of the cell holding x (its averages over the medium's part;
   // nullptr outside the region) and the cell's linear profile at x, their factor.
   struct Lookup {
@@ -105,12 +118,14 @@ class ExcitationGrid {
   size_t cell_count() const { return medium_volume_.size(); }
   // A cell's values summed over the bins.
   double cell_total(size_t cell) const;
-  // The photons' noise, measured by the tracing from its independent chunks before
-  // normalize() (which scales it with the values): per cell, the standard error of
-  // cell_total (same units as the tallies when set); relative_error() is their RMS
-  // over the RMS of the totals, cells weighted by the tally they hold, as the image
-  // weights them. 0 where not measured.
-  void set_tally_errors(std::vector<float> errors);
+  // The sum of grids of independent chunks of photons, whose spread measures the
+  // photons' noise (before normalize(), which scales it with the values): per cell,
+  // the standard error of cell_total (same units as the tallies), and that of the
+  // tally's centroid, which normalize() weighs each profile's slope against (a slope
+  // a few photons' noise could give is shrunk toward flat). relative_error() is the
+  // cells' standard errors' RMS over the RMS of their totals, cells weighted by the
+  // tally they hold, as the image weights them. 0 where not measured.
+  static ExcitationGrid sum_of_chunks(std::vector<ExcitationGrid> chunks);
   double cell_error(size_t cell) const { return cell < errors_.size() ? errors_[cell] : 0.0; }
   float relative_error() const { return relative_error_; }
   float cell_volume() const { return cell_size_.x * cell_size_.y * cell_size_.z; }
@@ -123,27 +138,44 @@ class ExcitationGrid {
   std::array<int, 3> n_{};
   Vec3 cell_size_;
   Measure measure_ = Measure::volume;
-  // add(index, t0, t1) for every piece [t0, t1] of a + t·(b − a)/|b − a| inside one cell.
+  // add(index, t0, t1) for every piece [t0, t1] of the ray a + t·d (d = (b − a)/|b − a|)
+  // inside one cell.
   template <typename F>
   void for_each_cell(const Vec3& a, const Vec3& b, F add) const;
-  // Adds a tally to a bin, and its first moment about the cell's centre at y.
+  // Adds a tally to a bin and its first moment about the cell's centre, at y.
   void tally(size_t cell, int bin, float value, const Vec3& y) {
     values_[cell * kBins + size_t(bin)] += value;
-    tally_moment_[cell] += value * (y - cell_center(cell));
+    const Vec3 offset = y - cell_center(cell);
+    for (int k = 0; k < 3; ++k) tally_moment_[cell][size_t(k)] += double(value) * offset[k];
   }
+  // Adds a piece of the medium's measure: in the first pass its measure and
+  // moments, in normalize()'s second the profile's integral over it.
+  // `offset`: its centroid about the cell's centre; `spread`: its own second
+  // moment about that centroid, per unit measure; `average_profile(rate)`: the
+  // mean of exp(rate·(y − offset)) over the piece.
+  template <typename AverageProfile>
+  void add_measure(size_t cell, float measure, const Vec3& offset, const std::array<float, 6>& spread,
+                   AverageProfile&& average_profile);
   std::vector<float> values_;         // cells × kBins
-  std::vector<float> medium_volume_;  // per cell, the medium's measure: m³, or mol/L·m³ (Measure::amount)
+  std::vector<double> medium_volume_;  // per cell, the medium's measure: m³, or mol/L·m³ (Measure::amount)
   // Per cell, about its centre: the tally's first moment (all bins) and the
-  // medium's (or pigment's) first and (per-axis) second moments.
-  std::vector<Vec3> tally_moment_, medium_moment_, medium_spread_;
-  std::vector<Vec3> medium_lo_, medium_hi_;  // per cell, the medium's extent about the centre (the limiter's)
-  // Per cell, from normalize(): the profile's centroid μ (about the centre) and
-  // gradient g; empty before (a flat profile).
+  // medium's (or pigment's) first and second moments (xx, yy, zz, xy, xz, yz). In
+  // double: a steep profile's fit amplifies their rounding (25× at an e-fold per
+  // tenth of the cell), and their terms cancel about the centre.
+  std::vector<std::array<double, 3>> tally_moment_, medium_moment_;
+  std::vector<std::array<double, 6>> medium_second_;
+  // Per cell, from normalize(): the profile scale·exp(rate·(x − centre − centroid));
+  // empty before (a flat profile).
   struct Profile {
-    Vec3 centroid, gradient;
+    Vec3 centroid, rate;
+    float scale = 1.f;
+    float limit = 0.f;  // the exponent's bound: rate × the medium's half-width along it
   };
   std::vector<Profile> profiles_;
+  std::vector<double> profile_integral_;  // normalize()'s second pass: per cell, ∫ exp(rate·(x − μ)) over the measure
+  bool second_pass_ = false;
   std::vector<float> errors_;         // per cell: standard error of cell_total
+  std::vector<std::array<double, 3>> centroid_variance_;  // per cell: variance of the tally's centroid, per axis
   float relative_error_ = 0.f;
 };
 

@@ -258,7 +258,7 @@ void measure_pigment_amount(const Scene& scene, int medium, int k, const Excitat
   const float support = support_radius(m.desc().interpolation);
   // A uniform box with the kernel's variance per axis: tent 1/6 voxel², box 1/12.
   const Vec3 spread = reach * (trilinear ? std::sqrt(0.5f) : 0.5f);
-  const float full_cell = 0.99f * grid.cell_volume();
+  const double full_cell = 0.99 * grid.cell_volume();
   auto add_part = [&](const Vec3& x, float amount, const Vec3& half) {
     if (!grid.region().contains(x)) return;
     if (volume.medium_measure(grid.cell_of(x)) < full_cell && medium_at(scene, x) != medium) return;
@@ -318,24 +318,6 @@ void measure_pigment_amount(const Scene& scene, int medium, int k, const Excitat
       }
 }
 
-// The standard error of each cell's summed tally from the independent chunks:
-// the variance of a sum of K chunk tallies is K times their sample variance.
-std::vector<float> tally_errors_from_chunks(const std::vector<ExcitationGrid>& chunks) {
-  const size_t K = chunks.size();
-  if (K < 2) return {};
-  std::vector<float> errors(chunks[0].cell_count());
-  std::vector<double> t(K);
-  for (size_t c = 0; c < errors.size(); ++c) {
-    double sum = 0;
-    for (size_t k = 0; k < K; ++k) sum += t[k] = chunks[k].cell_total(c);
-    const double mean = sum / double(K);
-    double deviations = 0;
-    for (double x : t) deviations += (x - mean) * (x - mean);
-    errors[c] = float(std::sqrt(double(K) * deviations / double(K - 1)));
-  }
-  return errors;
-}
-
 ExcitationGrid trace_pigment(const Scene& scene, int medium, int k, const PhotonTracing& tracing,
                              const std::atomic<bool>* stop) {
   const FluorescentPigment& fp = scene.fluorescence[size_t(medium)][size_t(k)];
@@ -366,20 +348,20 @@ ExcitationGrid trace_pigment(const Scene& scene, int medium, int k, const Photon
       trace_photon(scene, medium, fp, emission, target, tracing, chunks[size_t(chunk)], rng);
     }
   });
-  std::vector<float> errors = tally_errors_from_chunks(chunks);
-  ExcitationGrid grid = std::move(chunks[0]);
-  for (int c = 1; c < kChunks; ++c) grid.add(chunks[size_t(c)]);
-  grid.set_tally_errors(std::move(errors));
-  Rng lines(hash_combine(tracing.seed, hash_combine(uint64_t(medium), uint64_t(k))), 0);
+  ExcitationGrid grid = ExcitationGrid::sum_of_chunks(std::move(chunks));
+  const uint64_t lines_seed = hash_combine(tracing.seed, hash_combine(uint64_t(medium), uint64_t(k)));
   if (in_grid) {
-    // Which cells the medium fills, for measure_pigment_amount's test of the others.
     ExcitationGrid volume(region, cells);
+    Rng lines(lines_seed, 0);
     measure_medium_volume(scene, medium, volume, lines);
-    measure_pigment_amount(scene, medium, fp.pigment, volume, grid);
+    grid.normalize(double(tracing.photons),
+                   [&](ExcitationGrid& g) { measure_pigment_amount(scene, medium, fp.pigment, volume, g); });
   } else {
-    measure_medium_volume(scene, medium, grid, lines);
+    grid.normalize(double(tracing.photons), [&](ExcitationGrid& g) {
+      Rng lines(lines_seed, 0);
+      measure_medium_volume(scene, medium, g, lines);
+    });
   }
-  grid.normalize(double(tracing.photons));
   return grid;
 }
 

@@ -496,8 +496,8 @@ TEST(ExcitationPhotons, EventsReadingTheExactTallyGiveTheSlabsRadiance) {
 // emission is seen from the first layer under either face: each layer's average
 // alone reads the fluence as flat across the layer, while the camera's events
 // crowd toward the face, so the radiance is off (−9 % on the lit face, +11 % on the
-// other, 10σ); the layers' linear profiles, from the tally's and the medium's
-// first moments, give the analytic slab within the events' noise (1 %).
+// other, 10σ); the layers' exponential profiles, from the tally's and the medium's
+// moments, give the analytic slab within the events' noise (1 %).
 TEST(ExcitationPhotons, EventsReadingACoarseGridGiveTheSlabsRadiance) {
   SlabSetup s;
   s.concentration = 100;  // µM: μ = 460 /m at the beam's wavelengths
@@ -509,7 +509,6 @@ TEST(ExcitationPhotons, EventsReadingACoarseGridGiveTheSlabsRadiance) {
   constexpr int kLayers = 4, kSteps = 64;
   constexpr float kArea = 400.f;  // the grid's cross-section: one line of medium stands for all of it
   ExcitationGrid g(Bounds3{{-10, -10, 0}, {10, 10, float(s.D)}}, {1, 1, kLayers});
-  g.add_medium_volume({0, 0, 0}, {0, 0, float(s.D)}, kArea);
   for (int i = 0; i < kLayers * kSteps; ++i) {
     const double z0 = s.D * i / (kLayers * kSteps), z1 = s.D * (i + 1) / (kLayers * kSteps);
     for (int b = 0; b < ExcitationGrid::kBins; ++b) {
@@ -519,7 +518,7 @@ TEST(ExcitationPhotons, EventsReadingACoarseGridGiveTheSlabsRadiance) {
       g.deposit({0, 0, float(z0)}, {0, 0, float(z1)}, b, float(kArea * tally / (z1 - z0)));
     }
   }
-  g.normalize(1.0);
+  g.normalize(1.0, [&](ExcitationGrid& m) { m.add_medium_volume({0, 0, 0}, {0, 0, float(s.D)}, kArea); });
   expect_events_give_the_slab(scene, g, truth, 31, 0.0);
 }
 
