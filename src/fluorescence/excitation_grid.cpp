@@ -271,7 +271,7 @@ ExcitationGrid::Lookup ExcitationGrid::at(const Vec3& x) const {
   const size_t cell = cell_of(x);
   if (profiles_.empty()) return {&values_[cell * kBins], 1.f};
   const Profile& p = profiles_[cell];
-  // The exponent is bounded within the medium; the cap guards points beyond it.
+  // The exponent clamped to ± the rate times the medium's half-width along it.
   return {&values_[cell * kBins],
           p.scale * std::exp(std::clamp(dot(p.rate, x - cell_center(cell) - p.centroid), -p.limit, p.limit))};
 }

@@ -231,7 +231,7 @@ void split_kernel(bool trilinear, std::vector<float>& cuts, std::vector<KernelPa
   }
 }
 
-// The amount of pigment k, held in a grid, in each cell of `grid` (Measure::amount),
+// The amount of pigment k, held in a grid, for the cells of `grid` (Measure::amount),
 // ∫ c dV over the medium: every voxel's value times its volume, split by its
 // interpolation kernel over the cells its support reaches (exactly, per axis,
 // for a grid whose axes are the world's), so each cell gets the integral of the
@@ -241,8 +241,16 @@ void split_kernel(bool trilinear, std::vector<float>& cuts, std::vector<KernelPa
 // counts only if its centroid is in the medium: a spill's bottom voxels are centred
 // on the floor, half their tent under it, where no photon goes (counting them
 // whole read 6 % too bright). A rotated grid's voxels are split into their octants instead.
-void measure_pigment_amount(const Scene& scene, int medium, int k, const ExcitationGrid& volume,
-                            ExcitationGrid& grid) {
+// The parts are listed once (normalize() adds them twice, and finding them walks every
+// voxel and casts rays in the partly filled cells): each is `amount` spread over x ± half.
+struct PigmentPart {
+  Vec3 x;
+  float amount;
+  Vec3 half;
+};
+std::vector<PigmentPart> pigment_parts(const Scene& scene, int medium, int k, const ExcitationGrid& volume,
+                                       const ExcitationGrid& grid) {
+  std::vector<PigmentPart> out;
   const Medium& m = scene.media[size_t(medium)];
   const Field& field = m.desc().pigments[size_t(k)].concentration;
   const VoxelGrid& voxels = *field.grid;
@@ -262,7 +270,7 @@ void measure_pigment_amount(const Scene& scene, int medium, int k, const Excitat
   auto add_part = [&](const Vec3& x, float amount, const Vec3& half) {
     if (!grid.region().contains(x)) return;
     if (volume.medium_measure(grid.cell_of(x)) < full_cell && medium_at(scene, x) != medium) return;
-    grid.add_pigment_amount(x, amount, half);
+    out.push_back({x, amount, half});
   };
   const Vec3 diagonal{axis[0].x, axis[1].y, axis[2].z};  // an aligned grid's voxel edges (signed)
   const Bounds3& region = grid.region();
@@ -290,7 +298,7 @@ void measure_pigment_amount(const Scene& scene, int medium, int k, const Excitat
               const Bounds3 bounds = grid.cell_bounds(cell);
               if (volume.medium_measure(cell) >= full_cell && bounds.contains(center - support * reach) &&
                   bounds.contains(center + support * reach)) {
-                grid.add_pigment_amount(center, amount, spread);
+                out.push_back({center, amount, spread});
                 continue;
               }
               if (!aligned) {
@@ -316,6 +324,7 @@ void measure_pigment_amount(const Scene& scene, int medium, int k, const Excitat
                              amount * px.share * py.share * pz.share, mul(Vec3{px.half, py.half, pz.half}, reach));
             }
       }
+  return out;
 }
 
 ExcitationGrid trace_pigment(const Scene& scene, int medium, int k, const PhotonTracing& tracing,
@@ -354,8 +363,10 @@ ExcitationGrid trace_pigment(const Scene& scene, int medium, int k, const Photon
     ExcitationGrid volume(region, cells);
     Rng lines(lines_seed, 0);
     measure_medium_volume(scene, medium, volume, lines);
-    grid.normalize(double(tracing.photons),
-                   [&](ExcitationGrid& g) { measure_pigment_amount(scene, medium, fp.pigment, volume, g); });
+    const std::vector<PigmentPart> parts = pigment_parts(scene, medium, fp.pigment, volume, grid);
+    grid.normalize(double(tracing.photons), [&](ExcitationGrid& g) {
+      for (const PigmentPart& p : parts) g.add_pigment_amount(p.x, p.amount, p.half);
+    });
   } else {
     grid.normalize(double(tracing.photons), [&](ExcitationGrid& g) {
       Rng lines(lines_seed, 0);
