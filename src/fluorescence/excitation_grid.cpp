@@ -120,26 +120,26 @@ ExcitationGrid ExcitationGrid::sum_of_chunks(std::vector<ExcitationGrid> chunks)
   if (K < 2) return sum;
   const size_t cells = sum.cell_count();
   sum.errors_.assign(cells, 0.f);
-  sum.centroid_variance_.assign(cells, std::array<double, 3>{});
+  sum.centroid_covariance_.assign(cells, std::array<double, 6>{});
   double variance = 0, square = 0;
   for (size_t c = 0; c < cells; ++c) {
     // The variance of a sum of K chunk tallies is K times their sample variance; the
     // centroid T₁/T's by the delta method, from the chunks' residuals T₁ₖ − (T₁/T)·Tₖ.
     const double total = sum.cell_total(c);
     double deviations = 0;
-    std::array<double, 3> residuals{};
+    std::array<double, 6> residuals{};  // Σₖ rₐ r_b in the order xx, yy, zz, xy, xz, yz
     for (const ExcitationGrid& chunk : chunks) {
       const double t = chunk.cell_total(c);
       deviations += (t - total / double(K)) * (t - total / double(K));
-      for (size_t a = 0; a < 3; ++a)
-        if (total > 0.0) {
-          const double r = chunk.tally_moment_[c][a] - sum.tally_moment_[c][a] / total * t;
-          residuals[a] += r * r;
-        }
+      if (!(total > 0.0)) continue;
+      std::array<double, 3> r;
+      for (size_t a = 0; a < 3; ++a) r[a] = chunk.tally_moment_[c][a] - sum.tally_moment_[c][a] / total * t;
+      residuals[0] += r[0] * r[0], residuals[1] += r[1] * r[1], residuals[2] += r[2] * r[2];
+      residuals[3] += r[0] * r[1], residuals[4] += r[0] * r[2], residuals[5] += r[1] * r[2];
     }
     sum.errors_[c] = float(std::sqrt(double(K) * deviations / double(K - 1)));
-    for (size_t a = 0; a < 3; ++a)
-      sum.centroid_variance_[c][a] = total > 0.0 ? double(K) / double(K - 1) * residuals[a] / (total * total) : 0.0;
+    for (size_t i = 0; i < 6; ++i)
+      sum.centroid_covariance_[c][i] = total > 0.0 ? double(K) / double(K - 1) * residuals[i] / (total * total) : 0.0;
     variance += double(sum.errors_[c]) * sum.errors_[c];
     square += total * total;
   }
@@ -224,10 +224,11 @@ void ExcitationGrid::normalize(double photons, const std::function<void(Excitati
     // The photons' noise along g: a centroid offset it could give is shrunk toward
     // flat by (1 − 1/SNR²)₊, so a cell a few photons crossed reads its average.
     double shrink = 1.0;
-    if (c < centroid_variance_.size()) {
-      const std::array<double, 3>& v = centroid_variance_[c];
+    if (c < centroid_covariance_.size()) {
+      const std::array<double, 6>& v = centroid_covariance_[c];
       const double along = d.x * ux + d.y * uy + d.z * uz;
-      const double noise = ux * ux * v[0] + uy * uy * v[1] + uz * uz * v[2];
+      const double noise =
+          ux * ux * v[0] + uy * uy * v[1] + uz * uz * v[2] + 2 * (ux * uy * v[3] + ux * uz * v[4] + uy * uz * v[5]);
       if (noise > 0.0) shrink = std::max(0.0, 1.0 - noise / (along * along));
     }
     if (!(shrink > 0.0)) continue;

@@ -175,7 +175,10 @@ class ExcitationGrid {
   std::vector<double> profile_integral_;  // normalize()'s second pass: per cell, ∫ exp(rate·(x − μ)) over the measure
   bool second_pass_ = false;
   std::vector<float> errors_;         // per cell: standard error of cell_total
-  std::vector<std::array<double, 3>> centroid_variance_;  // per cell: variance of the tally's centroid, per axis
+  // Per cell: the covariance of the tally's centroid (xx, yy, zz, xy, xz, yz): a thin
+  // sheet's centroid is sharp across it and noisy along it, so the noise along any
+  // direction needs the off-diagonal terms.
+  std::vector<std::array<double, 6>> centroid_covariance_;
   float relative_error_ = 0.f;
 };
 
