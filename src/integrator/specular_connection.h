@@ -7,7 +7,8 @@
 // at the hero wavelength (Sellmeier glass bends each λ by its own index).
 //
 // The first chain is the straight line's from the point x to the light point
-// y: the dielectric faces it crosses, in order. Two solvers, one per geometry:
+// y: the dielectric faces it crosses, in order; the walls of x's vessel give
+// more (deterministic_chains). Two solvers, one per geometry:
 // - all faces crossed, parallel planes (box faces, flat-shaded triangles):
 //   Snell's invariant s = n_i sin θ_i, a 1-D monotone root, exact and unique
 //   (the optical path length is strictly convex);
@@ -21,18 +22,16 @@
 // random seed chain (a direction from x scattered on through the glass as the
 // glass would: reflected with probability R; SeedPolicy can keep it to
 // refraction), each solution it finds weighted by the number of further seeds
-// it takes to find it again. So the light through a cuvette's lid, the light a
-// beaker's wall mirrors out of its free surface, are found where the straight
-// line crosses other faces.
+// it takes to find it again. So the light a beaker's wall mirrors out of its
+// free surface, or bends in beside the straight line, is found where the
+// straight line crosses other faces.
 //
 // Partition with `full` mode's continuation paths (area lights): a
 // continuation from x that reaches an area light at y through specular glass
-// events only is dropped when the straight line's chain or one of its prefixes
-// that ends in the medium the whole chain ends in (a path refracted at the first
-// faces can pass beside the others: out of a beaker's free surface and over the
-// rim the straight line clips) solves to that same path (same shapes, vertices
-// within tolerance), and otherwise with the probability that SMS's capped count
-// holds it (connection_owns). Each specular path x → y is so counted once in
+// events only is dropped when one of the deterministic chains (the straight
+// line's, its prefixes, the walls of x's vessel: deterministic_chains) solves
+// to that same path (same shapes, vertices within tolerance), and otherwise with
+// the probability that SMS's capped count holds it (connection_owns). Each specular path x → y is so counted once in
 // expectation; continuations keep the paths no seed converges to (more than
 // kMaxSpecularChain faces, spheres). Delta lights have no second strategy:
 // those paths are not found (docs/fluorescence.md).
@@ -138,11 +137,27 @@ std::optional<SpecularChain> specular_seed_chain(const Scene& scene, const Vec3&
 std::optional<RefractedPath> solve_from_random_seed(const Scene& scene, const Vec3& x, const Vec3& y, bool to_infinity,
                                                     float lambda_nm, bool reflect_too, Rng& rng);
 
+// The chains the connection solves deterministically from x toward the light
+// point y (or the direction y, to_infinity): the straight line's chain; for area
+// lights, each of its prefixes that ends in the medium the whole chain ends in
+// (a path refracted at the first faces can pass beside the others: out of a
+// beaker's free surface and over the rim the straight line clips); and, when the
+// straight line crosses glass, the walls of x's vessel along the world axes
+// toward the light whose faces are flat and parallel (a cuvette's side walls, lid and floor: the
+// light a side panel sends in through the lid or the front wall at a grazing
+// angle). Empty when the straight line meets an opaque surface.
+struct DeterministicChains {
+  static constexpr int kMax = 1 + (kMaxSpecularChain - 1) + 3;
+  std::array<SpecularChain, kMax> chains;
+  int count = 0;
+};
+DeterministicChains deterministic_chains(const Scene& scene, const Vec3& x, const Vec3& y, bool to_infinity,
+                                         bool area_light, float lambda_nm);
 // A path a continuation walked from x at λ (specular glass events at `walked`,
-// then the area light at y): true when a deterministic solve of the connection
-// (the straight line's chain or one of its prefixes) returns it.
-bool solved_from_straight_line(const Scene& scene, const Vec3& x, const Vec3& y, const SpecularChain& walked,
-                               float lambda_nm);
+// then the area light at y): true when the solve of one of the connection's
+// deterministic chains returns it.
+bool solved_deterministically(const Scene& scene, const Vec3& x, const Vec3& y, const SpecularChain& walked,
+                              float lambda_nm);
 // True when the connection owns that path: solved from the straight line, or
 // else (with `seeds`: the connection seeds too) with the probability that the
 // connection's random seeds count it (one of kMaxSeedTrials fresh seeds
@@ -156,9 +171,9 @@ bool connection_owns(const Scene& scene, const Vec3& x, const Vec3& y, const Spe
 // and legs cast plain rays from it; connection_owns' seeds must leave from it too).
 Vec3 connection_start(const Scene& scene, const ShadowOrigin& from, const Vec3& toward);
 
-// Light from one light reaching a point through the dielectric chain of the
-// straight line to one light sample (area lights: a point uniform by area from
-// `u`, and the chain's prefixes), plus the SMS estimate of one other solution:
+// Light from one light reaching a point through the deterministic chains toward
+// one light sample (area lights: a point uniform by area from `u`), plus the SMS
+// estimate of one other solution:
 // each path's direction at the point (first leg, toward the light) and what it
 // brings, per lane of media.lambda(): radiance times solid angle,
 //   L · Π F_i · T_media · (n_x / n_light)² · dω/dA_⊥ · |cos θ_light| / pdf_A,
@@ -182,7 +197,7 @@ struct ArrivingLight {
     Vec3 wi;
     SampledSpectrum L;
   };
-  std::array<Path, kMaxSpecularChain + 1> paths;  // the straight line's, its chain's prefixes' and a seed's
+  std::array<Path, DeterministicChains::kMax + 1> paths;  // the deterministic chains' and a seed's
   int count = 0;
 };
 std::optional<ArrivingLight> light_through_dielectrics(const Scene& scene, const ShadowOrigin& from, int light_index,
