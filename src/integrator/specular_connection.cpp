@@ -187,15 +187,15 @@ unsigned exit_prefixes(const Scene& scene, const SpecularChain& chain, const Vec
   return prefixes;
 }
 
-
 // The walls of the vessel around x: along each world axis pointing to the light's
 // side (dot(d, toward) > 0), the dielectric faces the ray from x crosses up to the
 // first opaque surface, kept when they are flat and parallel and the first is a
-// face of `vessel` (the shape the straight line leaves x through). A refracted path can leave through any
-// wall: from under a cuvette's lid, a panel beside it shines in through the side
-// wall the straight line crosses and, at grazing angles, through the lid and the
-// front and back walls, whose paths start ≈ 40° off the straight line, outside
-// the random seeds' cone. Each such chain solves in closed form.
+// face of `vessel` (the shape the straight line leaves x through). A refracted
+// path can leave through any wall: from under a cuvette's lid, a panel beside it
+// shines in through the side wall the straight line crosses and, at grazing
+// angles, through the lid and the front and back walls, whose paths start ≈ 40°
+// off the straight line, outside the random seeds' cone. Each such chain solves
+// in closed form.
 int wall_chains(const Scene& scene, const Vec3& x, const Vec3& toward, int vessel, std::span<SpecularChain, 3> walls) {
   int count = 0;
   for (int axis = 0; axis < 3; ++axis)
@@ -474,8 +474,9 @@ bool same_path(const RefractedPath& a, const RefractedPath& b, float tolerance) 
 // on glass_UVB_5uM_Q0.23 a cap of 1024 for them took 1.3× the CPU time of 64 at
 // the same fluorescence error (relMSE 0.106 and 0.105 at 512 spp, 6 seeds).
 // Crossings only keep 1024: the seeds find paths through glass beside the
-// straight line with p of a few per cent (a cuvette's lid, now a wall: ≈ 2 %),
-// and left to continuations (27 % of the time with a cap of 64) they are the tail.
+// straight line with p of a few per cent (a cuvette's lid, which the walls also
+// solve: ≈ 2 %), and left to continuations (27 % of the time with a cap of 64)
+// they are the tail.
 int max_seed_trials(bool area_light, std::span<const ChainFace> faces) {
   constexpr int kMaxSeedTrials = 1024, kMaxMirroredSeedTrials = 64;
   if (!area_light) return kMaxSeedTrials;
