@@ -380,6 +380,40 @@ TEST(SpecularConnection, PathThroughTheLidIsSolvedAsAWall) {
   EXPECT_TRUE(connection_owns(scene, kUnderLid, y, walked, kLambda, rng, false));
 }
 
+// A distant light up and to the left of the cuvette (toward it: (−0.857, 0.514, 0)):
+// from (1, 4, 0) cm the straight line leaves through the left wall, and the beam
+// also comes in through the lid. Both are planar walls of the vessel: each one's
+// closed form (Fresnel at both faces, the beam's cross-section cos θ_air / cos θ₀,
+// Beer–Lambert over the liquid leg), and their sum is the connection's, with no
+// random seed.
+TEST(SpecularConnection, DistantLightThroughTheWallsSumsEachWallsClosedForm) {
+  const Scene scene = load_scene(write_scene("connect_walls_distant", dye_scene_head("direct") + R"(
+    {"type": "box", "min": [-0.022, 0, -0.022], "max": [0.022, 0.064, 0.022], "material": "glass"},
+    {"type": "box", "min": [-0.02, 0.002, -0.02], "max": [0.02, 0.062, 0.02], "material": "glass_to_solution",
+     "inside": "solution"}],
+  "lights": [{"type": "distant", "direction": [1, -0.6, 0], "spectrum": {"gaussian": [420, 8]}, "scale": 3}]})"));
+  const Vec3 x(0.01f, 0.04f, 0.f);
+  SampledWavelengths wl = SampledWavelengths::single(kLambda);
+  PreparedMedia media(scene, wl);
+  Rng rng;
+  const auto arriving = light_through_dielectrics(scene, ShadowOrigin{x, 0, nullptr}, 0, Point2{}, media, rng,
+                                                  SeedPolicy{0.f, true});
+  ASSERT_TRUE(arriving);
+  EXPECT_EQ(arriving->count, 2) << "the left wall and the lid";
+  double sum = 0;
+  for (int i = 0; i < arriving->count; ++i) sum += arriving->paths[size_t(i)].L[0];
+  const double E = 3 * std::get<DistantLight>(scene.lights[0]).L(kLambda);
+  const auto through_wall = [&](double cos_air, double h0) {
+    const double s = kN[2] * std::sqrt(1 - cos_air * cos_air);
+    const double cos1 = std::sqrt(1 - s * s / (kN[1] * kN[1])), cos0 = std::sqrt(1 - s * s);
+    return E * fresnel_T(cos0, kN[1] / kN[0]) * fresnel_T(cos1, kN[2] / kN[1]) * cos_air / cos0 *
+           std::exp(-kMuA * h0 / cos0);
+  };
+  const double norm = std::sqrt(1 + 0.36);
+  const double left = through_wall(1 / norm, 0.03), lid = through_wall(0.6 / norm, 0.022);
+  EXPECT_NEAR(sum / (left + lid), 1.0, 1e-4) << "left wall " << left << ", lid " << lid;
+}
+
 TEST(SpecularConnection, PartitionCountsPathsThroughOtherFacesOnce) {
   // As PartitionWithContinuationsCountsEachPathOnce, under the cuvette's lid.
   // The light through the lid is the walls' solve; past the cuvette's other
