@@ -461,6 +461,14 @@ std::optional<RefractedPath> solve_from_seed(const Scene& scene, const Vec3& x, 
   return solve_refracted_path(scene, *chain, x, y, to_infinity, lambda_nm);
 }
 
+// The vertex tolerance for telling a path to `end` from x apart from another:
+// a fraction of the distance to the light point (distant lights: to the path's
+// last vertex; a path through no glass is never compared).
+float path_tolerance(const RefractedPath& path, const Vec3& x, const LightEnd& end) {
+  if (!end.to_infinity) return kOwnedVertexTolerance * length(end.y - x);
+  return path.count > 0 ? kOwnedVertexTolerance * length(path.face[path.count - 1].p - x) : 0.f;
+}
+
 bool same_path(const RefractedPath& a, const RefractedPath& b, float tolerance) {
   return same_vertices({a.face.data(), size_t(a.count)}, {b.face.data(), size_t(b.count)}, tolerance);
 }
@@ -564,8 +572,7 @@ std::optional<ArrivingLight> light_through_dielectrics(const Scene& scene, const
     if (c.count == 0 && !seeds.clear_line) continue;
     const auto path = solve_refracted_path(scene, c, x, end.y, end.to_infinity, lambda_nm);
     if (!path) continue;
-    const float tolerance =
-        kOwnedVertexTolerance * length((end.to_infinity ? path->face[std::max(path->count - 1, 0)].p : end.y) - x);
+    const float tolerance = path_tolerance(*path, x, end);
     bool known = false;
     for (int j = 0; j < solved_count; ++j) known |= same_path(*path, solved[size_t(j)], tolerance);
     if (known) continue;
@@ -588,8 +595,7 @@ std::optional<ArrivingLight> light_through_dielectrics(const Scene& scene, const
       return solve_from_seed(scene, x, end.y, end.to_infinity, lambda_nm, seeds.reflect, rng);
     };
     const auto found = seed();
-    const float tolerance =
-        found ? kOwnedVertexTolerance * length((end.to_infinity ? found->face[found->count - 1].p : end.y) - x) : 0.f;
+    const float tolerance = found ? path_tolerance(*found, x, end) : 0.f;
     bool known = false;
     for (int i = 0; found && i < solved_count; ++i) known |= same_path(*found, solved[i], tolerance);
     if (found && !known) {

@@ -30,9 +30,9 @@
 // continuation from x that reaches an area light at y through specular glass
 // events only is dropped when one of the deterministic chains (the straight
 // line's, its prefixes, the walls of x's vessel: deterministic_chains) solves
-// to that same path (same shapes, vertices within tolerance), and otherwise with
-// the probability that SMS's capped count holds it (connection_owns). Each specular path x → y is so counted once in
-// expectation; continuations keep the paths no seed converges to (more than
+// to that same path (same shapes, vertices within tolerance), and otherwise
+// with the probability that SMS's capped count holds it (connection_owns).
+// Each specular path x → y is so counted once in expectation; continuations keep the paths no seed converges to (more than
 // kMaxSpecularChain faces, spheres). Delta lights have no second strategy:
 // those paths are not found (docs/fluorescence.md).
 #include <array>
@@ -143,9 +143,9 @@ std::optional<RefractedPath> solve_from_random_seed(const Scene& scene, const Ve
 // (a path refracted at the first faces can pass beside the others: out of a
 // beaker's free surface and over the rim the straight line clips); and, when the
 // straight line crosses glass, the walls of x's vessel along the world axes
-// toward the light whose faces are flat and parallel (a cuvette's side walls, lid and floor: the
-// light a side panel sends in through the lid or the front wall at a grazing
-// angle). Empty when the straight line meets an opaque surface.
+// toward the light whose faces are flat and parallel (a cuvette's side walls,
+// lid and floor: the light a side panel sends in through the lid or the front
+// wall at a grazing angle). Empty when the straight line meets an opaque surface.
 struct DeterministicChains {
   static constexpr int kMax = 1 + (kMaxSpecularChain - 1) + 3;
   std::array<SpecularChain, kMax> chains;
@@ -158,7 +158,7 @@ DeterministicChains deterministic_chains(const Scene& scene, const Vec3& x, cons
 // deterministic chains returns it.
 bool solved_deterministically(const Scene& scene, const Vec3& x, const Vec3& y, const SpecularChain& walked,
                               float lambda_nm);
-// True when the connection owns that path: solved from the straight line, or
+// True when the connection owns that path: solved deterministically, or
 // else (with `seeds`: the connection seeds too) with the probability that the
 // connection's random seeds count it (one of kMaxSeedTrials fresh seeds
 // converges to it), so that the continuation's share and the seeds' add up to

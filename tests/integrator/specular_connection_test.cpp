@@ -860,8 +860,8 @@ TEST(SpecularConnection, DirectLightLanesFollowTheGlassDispersion) {
 // inside a vessel's liquid, uniform directions refracted forward through the
 // glass by the path tracer's own dielectric (transmission forced, weight
 // Π(1 − R)) to where they leave (an opaque surface, or 10 m out when they
-// escape); a path counts as found when the solve seeded by the straight line
-// to that end point returns it (solved_deterministically). For area lights
+// escape); a path counts as found when a deterministic solve toward that end
+// point returns it (solved_deterministically). For area lights
 // continuations carry the share not found; for delta lights SMS's random seeds
 // do, so the share none of kSeeds random seeds reaches either bounds what a
 // delta light misses (a solution reached with probability p < 1/kSeeds may be
