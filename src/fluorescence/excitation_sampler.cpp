@@ -61,4 +61,14 @@ float ExcitationSampler::pdf(float lambda) const {
   return bins_.pmf(b) / bin_nm_;
 }
 
+float excitation_pdf(const ExcitationSampler& es, float lambda) {
+  return es.can_excite() ? es.pdf(lambda) : 1.f / (kLambdaMax - kLambdaMinUV);
+}
+
+float sample_excitation(const ExcitationSampler& es, float u, float* pdf) {
+  if (es.can_excite()) return es.sample(u, pdf);
+  *pdf = 1.f / (kLambdaMax - kLambdaMinUV);
+  return kLambdaMinUV + u * (kLambdaMax - kLambdaMinUV);
+}
+
 }  // namespace chlorovdb

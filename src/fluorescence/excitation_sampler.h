@@ -50,4 +50,11 @@ class ExcitationSampler {
   float support_min_ = 0, support_max_ = 0, uniform_pdf_ = 0;
 };
 
+// λ' for one light's excitation: its sampler's density (∝ S·ε·λ', or uniform
+// over that band with render.excitation_sampling = uniform); a light that cannot
+// excite the pigment (kept only when skips are off, to measure them) draws λ'
+// uniformly over the whole range. *pdf per nm.
+float sample_excitation(const ExcitationSampler& es, float u, float* pdf);
+float excitation_pdf(const ExcitationSampler& es, float lambda);
+
 }  // namespace chlorovdb

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "core/sampling.h"
+#include "integrator/bounce_connection.h"
 #include "integrator/specular_connection.h"
 
 namespace chlorovdb {
@@ -108,19 +109,6 @@ float distance_to_scene_exit(const Scene& scene, const Ray& ray) {
   return intersect_bounds(scene.geometry.bounds(), ray, kInfinity, &t0, &t1) ? t1 : 0.f;
 }
 
-// Density of λ' for a light's excitation sampler (∝ S·ε·λ', or uniform over
-// that band with render.excitation_sampling = uniform: the sampler knows which);
-// a light that cannot excite the pigment (kept only when skips are off, to
-// measure them) draws λ' uniformly over the whole range.
-float excitation_pdf(const ExcitationSampler& es, float lambda) {
-  return es.can_excite() ? es.pdf(lambda) : 1.f / (kLambdaMax - kLambdaMinUV);
-}
-float sample_excitation(const ExcitationSampler& es, float u, float* pdf) {
-  if (es.can_excite()) return es.sample(u, pdf);
-  *pdf = 1.f / (kLambdaMax - kLambdaMinUV);
-  return kLambdaMinUV + u * (kLambdaMax - kLambdaMinUV);
-}
-
 // Fluence-weighted absorption  λ'·μ_a(x,λ')·Φ̂(x,λ')  from light sources only:
 // one light, one point on it, λ' ∝ S·ε·λ', the excitation ray at λ'.
 float direct_excitation(const Scene& scene, const FluorescentPigment& fp, const Vec3& x, int medium, float c, Rng& rng,
@@ -170,7 +158,8 @@ float direct_excitation(const Scene& scene, const FluorescentPigment& fp, const 
 // an excitation path at λ'' in a direction from the medium's continuation guide
 // (uniform where it has none).
 float indirect_excitation(const Scene& scene, const FluorescentPigment& fp, const Vec3& x, int medium, float c,
-                          Rng& rng, PathStats& stats, int depth, float p_continue, float* lambda_excitation) {
+                          Rng& rng, PathStats& stats, int depth, float p_continue, const ContinuationOrigin* origin,
+                          float* lambda_excitation) {
   float pdf_lambda;
   const float lp = sample_continuation_wavelength(fp, rng, &pdf_lambda);
   *lambda_excitation = lp;
@@ -183,7 +172,7 @@ float indirect_excitation(const Scene& scene, const FluorescentPigment& fp, cons
   const Point2 u{rng.uniform(), rng.uniform()};
   const DirectionSample dir =
       guide ? guide->sample(x, u_mix, u) : DirectionSample{sample_uniform_sphere(u), uniform_sphere_pdf()};
-  const float radiance = continuation_radiance(scene, x, medium, dir.w, lp, rng, stats, depth);
+  const float radiance = continuation_radiance(scene, x, medium, dir.w, lp, rng, stats, depth, origin);
   const float fluence = radiance / (dir.pdf * pdf_lambda * p_continue);
   return lp * kAbsorptionPerMolarExtinction * eps * c * fluence;
 }
@@ -217,13 +206,19 @@ float sample_continuation_wavelength(const FluorescentPigment& fp, Rng& rng, flo
   return lp;
 }
 
+float continuation_direction_pdf(const Scene& scene, int medium, const Vec3& x, const Vec3& w) {
+  const ContinuationGuide* guide = scene.continuation_guide(medium);
+  return guide ? guide->pdf(x, w) : uniform_sphere_pdf();
+}
+
 float continuation_radiance(const Scene& scene, const Vec3& x, int medium, const Vec3& w, float lambda, Rng& rng,
-                            PathStats& stats, int depth) {
+                            PathStats& stats, int depth, const ContinuationOrigin* origin) {
   SampledWavelengths wl = SampledWavelengths::single(lambda);
   PathOptions options;
   options.skip_emitters_on_first_segment = true;
   options.skip_emitters_the_connection_owns = scene.settings.excitation_through_glass == ExcitationThroughGlass::connect;
   options.fluorescence_depth = depth + 1;
+  options.continuation_origin = origin;
   const PathRadiance sub = trace_path_from(scene, Ray{x, w}, medium, wl, rng, stats, options);
   return sub.fluorescence[0] + sub.other[0];
 }
@@ -294,13 +289,22 @@ SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, 
   float lp = 0.f;
   const float direct = direct_excitation(scene, fp, x, medium, c, rng, stats, &lp);
   add_emission(direct, lp);
-  if (scene.settings.fluorescence == FluorescenceMode::full && depth < kMaxContinuationDepth) {
-    const float p_continue = continuation_probability(depth, *continuations);
-    if (rng.uniform() < p_continue) {
-      ++*continuations;
-      const float indirect = indirect_excitation(scene, fp, x, medium, c, rng, stats, depth, p_continue, &lp);
-      add_emission(indirect, lp);
-    }
+  const bool may_continue = scene.settings.fluorescence == FluorescenceMode::full && depth < kMaxContinuationDepth;
+  const float p_continue = may_continue ? continuation_probability(depth, *continuations) : 0.f;
+  // Light a lit diffuse surface sends in through the glass, sampled from the
+  // lamp's side too (bounce_connection.h), where the continuation reaches it.
+  const bool bounce = may_continue && scene.settings.excitation_bounce && fp.lights_at_a_point &&
+                      scene.settings.excitation_through_glass == ExcitationThroughGlass::connect;
+  const ContinuationOrigin origin{x, medium, &fp, p_continue};
+  if (bounce) {
+    const BounceExcitation b = bounce_excitation(scene, origin, c, rng, stats);
+    add_emission(b.absorbed, b.lambda);
+  }
+  if (may_continue && rng.uniform() < p_continue) {
+    ++*continuations;
+    const float indirect =
+        indirect_excitation(scene, fp, x, medium, c, rng, stats, depth, p_continue, bounce ? &origin : nullptr, &lp);
+    add_emission(indirect, lp);
   }
 
   return T * j / (ds.pdf * p_pigment);

@@ -33,8 +33,13 @@ float continuation_wavelength_pdf(const FluorescentPigment& fp, float lambda);
 // continuation counts: no emitter on the first segment (the excitation ray
 // counts those), nor the paths the glass connection owns; nested events at
 // depth + 1. Training the continuation guides probes the same quantity.
+// `origin` (may be null): the event, when the bounce connection also samples
+// the light lit diffuse surfaces send it (the continuation then weighs those paths).
 float continuation_radiance(const Scene& scene, const Vec3& x, int medium, const Vec3& w, float lambda, Rng& rng,
-                            PathStats& stats, int depth);
+                            PathStats& stats, int depth, const ContinuationOrigin* origin = nullptr);
+// The solid-angle density of a continuation's direction w from x: the medium's
+// continuation guide's, uniform over the sphere without one.
+float continuation_direction_pdf(const Scene& scene, int medium, const Vec3& x, const Vec3& w);
 
 // The thesis's estimator (docs/physics.md §5), kept to measure its bias and cost:
 // called when the hero wavelength is absorbed at `p`; with probability Q it

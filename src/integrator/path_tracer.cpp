@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "core/sampling.h"
+#include "integrator/bounce_connection.h"
 #include "integrator/fluorescence_event.h"
 #include "integrator/specular_connection.h"
 #include "integrator/transport.h"
@@ -44,10 +45,13 @@ constexpr SeedPolicy kCameraSeeds{0.25f, false};
 // 3.4× the relMSE × time; without, 15 %, and default.json's total layer gained 1.25×
 // (docs/fluorescence.md). The straight line's path without glass is the shadow ray's.
 constexpr SeedPolicy kCameraAreaSeeds{0.f, false, false};
-template <typename ScatterFn>
+// `clear_line_weight(light_index)`: the share a point or spot light's straight
+// path through no glass keeps (an excitation continuation weighs it against the
+// bounce connection, bounce_connection.h; 1 elsewhere).
+template <typename ScatterFn, typename ClearLineWeight>
 SampledSpectrum sample_direct_light(const Scene& scene, const ScatterVertex& v, const SampledSpectrum& r_p,
                                     PreparedMedia& media, Rng& rng, bool through_glass, bool area_through_glass,
-                                    ScatterFn&& scatter) {
+                                    ScatterFn&& scatter, ClearLineWeight&& clear_line_weight) {
   if (scene.light_sampler.empty()) return {};
   const auto pick = scene.light_sampler.sample(rng.uniform());
   if (!pick || pick->pmf == 0.f) return {};
@@ -56,7 +60,11 @@ SampledSpectrum sample_direct_light(const Scene& scene, const ScatterVertex& v, 
   if (through_glass && is_delta(light)) {
     SampledSpectrum sum;
     if (const auto arriving = light_through_dielectrics(scene, v.origin, pick->index, Point2{}, media, rng, kCameraSeeds))
-      for (int i = 0; i < arriving->count; ++i) sum += scatter(arriving->paths[i].wi).first * arriving->paths[i].L;
+      for (int i = 0; i < arriving->count; ++i) {
+        const ArrivingLight::Path& p = arriving->paths[i];
+        const float w = p.faces == 0 ? clear_line_weight(pick->index) : 1.f;
+        sum += scatter(p.wi).first * p.L * w;
+      }
     return sum / (pick->pmf * r_p.average(lambda.count()));
   }
   SampledSpectrum through;  // area lights through glass (area_through_glass)
@@ -78,7 +86,7 @@ SampledSpectrum sample_direct_light(const Scene& scene, const ScatterVertex& v, 
   LightConnection c =
       connect_to_light(scene, v.origin, LightTarget{ls->wi, ls->p_light, ls->is_infinite}, media, rng, options);
   if (c.blocked) return through;
-  if (ls->is_delta) return f * c.T * ls->L / (light_pdf * r_p.average(lambda.count()));
+  if (ls->is_delta) return f * c.T * ls->L * clear_line_weight(pick->index) / (light_pdf * r_p.average(lambda.count()));
   c.r_l *= r_p * light_pdf;
   c.r_u *= r_p * scatter_pdf;
   return through + f * c.T * ls->L / (c.r_l + c.r_u).average(lambda.count());
@@ -210,11 +218,12 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
                 }
                 const Vec3 wo = -ray.d;
                 const ScatterVertex v{{p, medium, nullptr}, Vec3{}};
-                L.other += beta * sample_direct_light(scene, v, r_u, media, rng, direct_through_glass, area_through_glass,
-                                                      [&](const Vec3& wi) {
-                                                        return std::pair{phase_eval(mp.phase, wo, wi),
-                                                                         phase_pdf(mp.phase, wo, wi)};
-                                                      });
+                L.other += beta * sample_direct_light(
+                                      scene, v, r_u, media, rng, direct_through_glass, area_through_glass,
+                                      [&](const Vec3& wi) {
+                                        return std::pair{phase_eval(mp.phase, wo, wi), phase_pdf(mp.phase, wo, wi)};
+                                      },
+                                      [](int) { return 1.f; });
                 const MediumPhaseSample ps = phase_sample(mp.phase, wo, Point2{rng.uniform(), rng.uniform()});
                 if (!(ps.pdf > 0.f)) {
                   terminated = true;
@@ -296,11 +305,20 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
     const int medium_here = dot(wo, hit->ng) > 0.f ? binding.medium_outside : binding.medium_inside;
     const ScatterVertex v{{hit->p, medium_here, &prev_hit}, hit->ns};
     if (!bsdf.is_specular()) {
-      L.other += beta * sample_direct_light(scene, v, r_u, media, rng, direct_through_glass, area_through_glass,
-                                            [&](const Vec3& wi) {
-                                              return std::pair{bsdf.f(wo, wi) * std::fabs(dot(wi, hit->ns)),
-                                                               bsdf.pdf(wo, wi)};
-                                            });
+      // A continuation's first diffuse vertex, reached from its event through
+      // glass alone: the bounce connection samples the same paths from the light.
+      const bool weigh_against_bounce = options.continuation_origin && walk_from_excitation_origin && walked_only_glass;
+      L.other += beta * sample_direct_light(
+                            scene, v, r_u, media, rng, direct_through_glass, area_through_glass,
+                            [&](const Vec3& wi) {
+                              return std::pair{bsdf.f(wo, wi) * std::fabs(dot(wi, hit->ns)), bsdf.pdf(wo, wi)};
+                            },
+                            [&](int light_index) {
+                              return weigh_against_bounce
+                                         ? continuation_weight_against_bounce(scene, *options.continuation_origin,
+                                                                              walked, *hit, light_index, lambda[0])
+                                         : 1.f;
+                            });
     }
     const auto bs = bsdf.sample(wo, rng.uniform(), Point2{rng.uniform(), rng.uniform()});
     if (!bs || bs->pdf == 0.f) break;

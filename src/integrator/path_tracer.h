@@ -7,6 +7,8 @@
 
 namespace chlorovdb {
 
+struct ContinuationOrigin;  // integrator/bounce_connection.h
+
 // Radiance split by origin: light that went through at least one fluorescence
 // event, and everything else. Their sum is the image.
 struct PathRadiance {
@@ -34,6 +36,11 @@ struct PathOptions {
   // continuation ignores those. Paths are single-wavelength (λ = lambda[0]).
   bool skip_emitters_the_connection_owns = false;
   int fluorescence_depth = 0;  // nesting of excitation continuations
+  // The event an excitation continuation left, when the bounce connection
+  // (bounce_connection.h) also samples what lit diffuse surfaces send it: the
+  // shadow ray of the first diffuse vertex reached through glass alone weighs
+  // its straight light from a point or spot light against it.
+  const ContinuationOrigin* continuation_origin = nullptr;
   int max_segments = 1 << 16;  // hard bound on the loop (interfaces + collisions)
 };
 

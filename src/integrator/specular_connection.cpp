@@ -247,9 +247,8 @@ DeterministicChains deterministic_chains(const Scene& scene, const Vec3& x, cons
   return out;
 }
 
-bool solved_deterministically(const Scene& scene, const Vec3& x, const Vec3& y, const SpecularChain& walked,
-                              float lambda_nm) {
-  if (walked.count == 0) return false;  // straight to the light: the first-segment rule owns it
+std::optional<RefractedPath> deterministic_solution(const Scene& scene, const Vec3& x, const Vec3& y,
+                                                    const SpecularChain& walked, float lambda_nm) {
   const DeterministicChains candidates = deterministic_chains(scene, x, y, false, true, lambda_nm);
   const float tolerance = kOwnedVertexTolerance * length(y - x);
   for (int i = 0; i < candidates.count; ++i) {
@@ -258,9 +257,15 @@ bool solved_deterministically(const Scene& scene, const Vec3& x, const Vec3& y, 
     const auto path = solve_refracted_path(scene, c, x, y, false, lambda_nm);
     if (path &&
         same_vertices({path->face.data(), size_t(path->count)}, {walked.faces.data(), size_t(walked.count)}, tolerance))
-      return true;
+      return path;
   }
-  return false;
+  return std::nullopt;
+}
+
+bool solved_deterministically(const Scene& scene, const Vec3& x, const Vec3& y, const SpecularChain& walked,
+                              float lambda_nm) {
+  if (walked.count == 0) return false;  // straight to the light: the first-segment rule owns it
+  return deterministic_solution(scene, x, y, walked, lambda_nm).has_value();
 }
 
 std::optional<RefractedPath> solve_refracted_path(const Scene& scene, const SpecularChain& chain, const Vec3& x,
@@ -367,15 +372,21 @@ struct LightEnd {
   bool to_infinity = false;
 };
 
-// Light arriving at x from `light` along one solved path, per lane of
-// media.lambda(): radiance times solid angle (the fluence rate it brings), with
-// each leg reaching its face and nothing else, Fresnel transmission (or
-// reflectance, at a mirror vertex) at every face, medium transmittance on every
-// leg and the generalised geometry term.
+// Fresnel transmission at face j of the path (reflectance at a mirror vertex),
+// at the shading normal as the path tracer's dielectric scatters.
+float face_fresnel(const Scene& scene, const RefractedPath& path, int j, float lambda_nm) {
+  const float R =
+      fresnel_dielectric(dot(-path.dir[j], path.ns[j]), ior_at(dielectric_of(scene, path.face[j].shape_id), lambda_nm));
+  return path.face[j].reflect ? R : 1.f - R;
+}
+
+// What one solved path from x to `end` lets through, per lane of media.lambda():
+// face_fresnel at every face and the medium transmittance on every leg, each
+// leg reaching its face and nothing else. Zero when blocked.
 // The path and its Fresnel factors are the hero wavelength's; the caller keeps
-// only the hero lane when the glass disperses. Zero when blocked.
-SampledSpectrum refracted_path_light(const Scene& scene, const Vec3& x, int medium, const Light& light,
-                                     const LightEnd& end, const RefractedPath& path, PreparedMedia& media, Rng& rng) {
+// only the hero lane when the glass disperses.
+SampledSpectrum path_transmission(const Scene& scene, const Vec3& x, int medium, const LightEnd& end,
+                                  const RefractedPath& path, PreparedMedia& media, Rng& rng) {
   const SampledWavelengths& wl = media.lambda();
   const int k = path.count;
   // Medium transmittance of one leg: the shared light connection, stopped by any glass.
@@ -405,9 +416,7 @@ SampledSpectrum refracted_path_light(const Scene& scene, const Vec3& x, int medi
     // when an interface (a medium boundary) lies between them.
     weight *= j == 0 ? leg_transmittance(ShadowOrigin{v, medium_after_crossing(b, f.ng, -d), &here}, LightTarget{-d, x})
                      : leg_transmittance(ShadowOrigin{prev.p, leg_medium, &prev}, LightTarget{d, v});
-    // At the shading normal, as the path tracer's dielectric scatters.
-    const float R = fresnel_dielectric(dot(-d, path.ns[j]), ior_at(dielectric_of(scene, f.shape_id), wl[0]));
-    weight *= f.reflect ? R : 1.f - R;
+    weight *= face_fresnel(scene, path, j, wl[0]);
     if (dark(weight)) return {};
     leg_medium = medium_after_crossing(b, f.ng, path.dir[j + 1]);  // where the next leg runs
     prev = here;
@@ -417,13 +426,24 @@ SampledSpectrum refracted_path_light(const Scene& scene, const Vec3& x, int medi
   weight *= leg_transmittance(from, LightTarget{d_last, end.to_infinity ? prev.p + d_last * kInfinity : end.y,
                                                 end.to_infinity});
   if (dark(weight)) return {};
+  return weight;
+}
 
+// Light arriving at x from `light` along one solved path, per lane of
+// media.lambda(): radiance times solid angle (the fluence rate it brings), with
+// path_transmission and the generalised geometry term. Zero when blocked.
+SampledSpectrum refracted_path_light(const Scene& scene, const Vec3& x, int medium, const Light& light,
+                                     const LightEnd& end, const RefractedPath& path, PreparedMedia& media, Rng& rng) {
+  const SampledWavelengths& wl = media.lambda();
+  const SampledSpectrum weight = path_transmission(scene, x, medium, end, path, media, rng);
+  if (weight.is_black()) return {};
+  const Vec3& d_last = path.dir[path.count];
   if (end.to_infinity) {
     const auto& distant = std::get<DistantLight>(light);
     return distant.L.sample(wl) * (distant.scale * float(path.geometry)) * weight;
   }
   // Radiance compressed into the denser medium: (n_x / n_light)², n_x = 1 here.
-  const float g = float(path.geometry / (path.n[k] * path.n[k]));
+  const float g = float(path.geometry / (path.n[path.count] * path.n[path.count]));
   if (const auto* area = std::get_if<AreaLight>(&light))
     return Le_area(*area, end.n, -d_last, wl) * (g * std::fabs(dot(end.n, d_last)) / end.pdf_area) * weight;
   if (const auto* point = std::get_if<PointLight>(&light)) return point->I.sample(wl) * (point->scale * g) * weight;
@@ -493,6 +513,31 @@ int max_seed_trials(bool area_light, std::span<const ChainFace> faces) {
   return kMaxSeedTrials;
 }
 
+// The deterministic solves (deterministic_chains) from x toward `end`: the
+// straight line's chain (its clear path through no glass if `clear_line`), for
+// area lights (and surface points) its prefixes, and the walls around x; a path
+// two of them return counts once.
+struct SolvedPaths {
+  std::array<RefractedPath, DeterministicChains::kMax> paths;
+  int count = 0;
+};
+SolvedPaths solve_deterministic_chains(const Scene& scene, const Vec3& x, const LightEnd& end, bool area_light,
+                                       bool clear_line, float lambda_nm) {
+  SolvedPaths solved;
+  const DeterministicChains candidates = deterministic_chains(scene, x, end.y, end.to_infinity, area_light, lambda_nm);
+  for (int i = 0; i < candidates.count; ++i) {
+    const SpecularChain& c = candidates.chains[size_t(i)];
+    if (c.count == 0 && !clear_line) continue;
+    const auto path = solve_refracted_path(scene, c, x, end.y, end.to_infinity, lambda_nm);
+    if (!path) continue;
+    const float tolerance = path_tolerance(*path, x, end);
+    bool known = false;
+    for (int j = 0; j < solved.count; ++j) known |= same_path(*path, solved.paths[size_t(j)], tolerance);
+    if (!known) solved.paths[size_t(solved.count++)] = *path;
+  }
+  return solved;
+}
+
 }  // namespace
 
 std::optional<RefractedPath> solve_from_random_seed(const Scene& scene, const Vec3& x, const Vec3& y, bool to_infinity,
@@ -529,6 +574,33 @@ Vec3 connection_start(const Scene& scene, const ShadowOrigin& from, const Vec3& 
   return from.hit ? scene.geometry.spawn_ray(*from.hit, toward).o : from.p;
 }
 
+float path_fresnel(const Scene& scene, const RefractedPath& path, float lambda_nm) {
+  float F = 1.f;
+  for (int j = 0; j < path.count; ++j) F *= face_fresnel(scene, path, j, lambda_nm);
+  return F;
+}
+
+PathsToSurface paths_to_surface_point(const Scene& scene, const Vec3& x, int medium, const Vec3& z, const Vec3& ng,
+                                      PreparedMedia& media, Rng& rng) {
+  LightEnd end;
+  end.y = z, end.n = ng;
+  const SolvedPaths solved = solve_deterministic_chains(scene, x, end, true, true, media.lambda()[0]);
+  PathsToSurface out;
+  for (int i = 0; i < solved.count; ++i) {
+    const RefractedPath& path = solved.paths[i];
+    PathToSurface& p = out.paths[size_t(out.count)];
+    p.transport = path_transmission(scene, x, medium, end, path, media, rng);
+    if (p.transport.is_black()) continue;
+    p.path = path;
+    p.fresnel = path_fresnel(scene, path, media.lambda()[0]);
+    p.solid_angle_per_area = path.geometry * std::fabs(dot(ng, path.dir[path.count]));
+    // Radiance compressed into the denser medium: (n_x / n_z)², n_x = 1 here.
+    p.transport *= float(p.solid_angle_per_area / (path.n[path.count] * path.n[path.count]));
+    ++out.count;
+  }
+  return out;
+}
+
 std::optional<ArrivingLight> light_through_dielectrics(const Scene& scene, const ShadowOrigin& from, int light_index,
                                                        Point2 u, PreparedMedia& media, Rng& rng,
                                                        SeedPolicy seeds) {
@@ -557,28 +629,14 @@ std::optional<ArrivingLight> light_through_dielectrics(const Scene& scene, const
     if (L.is_black()) return;
     ArrivingLight::Path& p = arriving.paths[arriving.count++];
     p.wi = path.dir[0];
+    p.faces = path.count;
     p.L = L * count;
     for (int j = 0; j < path.count; ++j) dispersed |= is_dispersive(dielectric_of(scene, path.face[j].shape_id));
   };
-  // The deterministic solves (deterministic_chains): the straight line's chain,
-  // for area lights its prefixes, and the walls around x; a path two of them
-  // return counts once.
-  std::array<RefractedPath, DeterministicChains::kMax> solved;
-  int solved_count = 0;
   const bool area_light = std::holds_alternative<AreaLight>(light);
-  const DeterministicChains candidates = deterministic_chains(scene, x, end.y, end.to_infinity, area_light, lambda_nm);
-  for (int i = 0; i < candidates.count; ++i) {
-    const SpecularChain& c = candidates.chains[size_t(i)];
-    if (c.count == 0 && !seeds.clear_line) continue;
-    const auto path = solve_refracted_path(scene, c, x, end.y, end.to_infinity, lambda_nm);
-    if (!path) continue;
-    const float tolerance = path_tolerance(*path, x, end);
-    bool known = false;
-    for (int j = 0; j < solved_count; ++j) known |= same_path(*path, solved[size_t(j)], tolerance);
-    if (known) continue;
-    solved[size_t(solved_count++)] = *path;
-    add(*path, refracted_path_light(scene, x, medium, light, end, *path, media, rng), 1.f);
-  }
+  const SolvedPaths solved = solve_deterministic_chains(scene, x, end, area_light, seeds.clear_line, lambda_nm);
+  for (int i = 0; i < solved.count; ++i)
+    add(solved.paths[i], refracted_path_light(scene, x, medium, light, end, solved.paths[i], media, rng), 1.f);
 
   // The other solutions by SMS's unbiased estimate (Zeltner et al. 2020, §4.3),
   // for every light: a point inside a cuvette under a side lamp is also reached
@@ -597,7 +655,7 @@ std::optional<ArrivingLight> light_through_dielectrics(const Scene& scene, const
     const auto found = seed();
     const float tolerance = found ? path_tolerance(*found, x, end) : 0.f;
     bool known = false;
-    for (int i = 0; found && i < solved_count; ++i) known |= same_path(*found, solved[i], tolerance);
+    for (int i = 0; found && i < solved.count; ++i) known |= same_path(*found, solved.paths[i], tolerance);
     if (found && !known) {
       const SampledSpectrum L = refracted_path_light(scene, x, medium, light, end, *found, media, rng);
       if (!L.is_black()) {

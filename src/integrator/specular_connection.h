@@ -158,6 +158,10 @@ DeterministicChains deterministic_chains(const Scene& scene, const Vec3& x, cons
 // deterministic chains returns it.
 bool solved_deterministically(const Scene& scene, const Vec3& x, const Vec3& y, const SpecularChain& walked,
                               float lambda_nm);
+// The solved path of that deterministic chain, for any walk (also one through
+// no glass: the straight line); nullopt when no deterministic chain returns it.
+std::optional<RefractedPath> deterministic_solution(const Scene& scene, const Vec3& x, const Vec3& y,
+                                                    const SpecularChain& walked, float lambda_nm);
 // True when the connection owns that path: solved deterministically, or
 // else (with `seeds`: the connection seeds too) with the probability that the
 // connection's random seeds count it (one of kMaxSeedTrials fresh seeds
@@ -170,6 +174,30 @@ bool connection_owns(const Scene& scene, const Vec3& x, const Vec3& y, const Spe
 // point itself, a surface point offset off its surface to that side (the solves
 // and legs cast plain rays from it; connection_owns' seeds must leave from it too).
 Vec3 connection_start(const Scene& scene, const ShadowOrigin& from, const Vec3& toward);
+
+// The paths the deterministic chains solve from x (a medium point) to the point
+// z of a surface with geometric normal ng, no random seeds (the light a lit floor
+// sends through a vessel's glass; integrator/bounce_connection.h), each with
+// what it carries from z to x at the hero wavelength:
+//   transport = Π F_i · T_legs · (n_x / n_z)² · dω_0/dA_z,
+// dω_0/dA_z = dω_0/dA_⊥ · |cos θ_z| (solid angle at x per area at z), and Π F_i
+// alone (the probability that the path tracer's dielectrics choose those events).
+// Blocked paths are left out.
+// Π F_i of a solved path: Fresnel transmission at each face it crosses,
+// reflectance where it mirrors, at the shading normals.
+float path_fresnel(const Scene& scene, const RefractedPath& path, float lambda_nm);
+struct PathToSurface {
+  RefractedPath path;
+  float fresnel = 0.f;
+  double solid_angle_per_area = 0;
+  SampledSpectrum transport;
+};
+struct PathsToSurface {
+  std::array<PathToSurface, DeterministicChains::kMax> paths;
+  int count = 0;
+};
+PathsToSurface paths_to_surface_point(const Scene& scene, const Vec3& x, int medium, const Vec3& z, const Vec3& ng,
+                                      PreparedMedia& media, Rng& rng);
 
 // Light from one light reaching a point through the deterministic chains toward
 // one light sample (area lights: a point uniform by area from `u`), plus the SMS
@@ -196,6 +224,7 @@ struct ArrivingLight {
   struct Path {
     Vec3 wi;
     SampledSpectrum L;
+    int faces = 0;  // dielectric faces on the way (0: the straight line through no glass)
   };
   std::array<Path, DeterministicChains::kMax + 1> paths;  // the deterministic chains' and a seed's
   int count = 0;

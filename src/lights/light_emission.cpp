@@ -82,11 +82,18 @@ BeamRay beam_ray(const Vec3& direction, Point2 u, float u_aim, const GeometrySce
   return BeamRay{Ray{centre + frame.to_world(Vec3{q.x, q.y, -radius}), direction}, density};
 }
 
+// The directions a light at a point emits its own rays into: point lights
+// uniformly over the sphere, spot lights uniformly within the outer cone.
+float own_direction_pdf(const PointLight&, const Vec3&) { return uniform_sphere_pdf(); }
+float own_direction_pdf(const SpotLight& light, const Vec3& w) {
+  return dot(w, light.direction) >= light.cos_falloff_end ? uniform_cone_pdf(light.cos_falloff_end) : 0.f;
+}
+
 std::optional<LightEmission> emit(const PointLight& light, Point2, Point2 u_dir, float lambda, const GeometryScene&,
                                   const EmissionTarget* target, float u_aim) {
   const auto dir = mixed_direction(
       target, light.position, u_dir, u_aim, [](Point2 u) -> std::optional<Vec3> { return sample_uniform_sphere(u); },
-      [](const Vec3&) { return uniform_sphere_pdf(); });
+      [&](const Vec3& w) { return own_direction_pdf(light, w); });
   if (!dir) return std::nullopt;
   const float flux = light.I(lambda) * light.scale / dir->pdf;
   if (!(flux > 0.f)) return std::nullopt;
@@ -96,11 +103,10 @@ std::optional<LightEmission> emit(const PointLight& light, Point2, Point2 u_dir,
 std::optional<LightEmission> emit(const SpotLight& light, Point2, Point2 u_dir, float lambda, const GeometryScene&,
                                   const EmissionTarget* target, float u_aim) {
   const Frame axis = Frame::from_z(light.direction);
-  const float cone_pdf = uniform_cone_pdf(light.cos_falloff_end);
   const auto dir = mixed_direction(
       target, light.position, u_dir, u_aim,
       [&](Point2 u) -> std::optional<Vec3> { return axis.to_world(sample_uniform_cone(u, light.cos_falloff_end)); },
-      [&](const Vec3& w) { return dot(w, light.direction) >= light.cos_falloff_end ? cone_pdf : 0.f; });
+      [&](const Vec3& w) { return own_direction_pdf(light, w); });
   if (!dir || !(dir->pdf > 0.f)) return std::nullopt;
   const float flux = light.I(lambda) * light.scale * spot_falloff(light, dir->w) / dir->pdf;
   if (!(flux > 0.f)) return std::nullopt;
@@ -173,6 +179,12 @@ std::optional<LightEmission> sample_emission(const Light& light, Point2 u_positi
                                              const EmissionTarget* target, float u_aim) {
   return std::visit(
       [&](const auto& l) { return emit(l, u_position, u_direction, lambda_nm, scene, target, u_aim); }, light);
+}
+
+float emission_direction_pdf(const Light& light, const Vec3& w) {
+  if (const auto* point = std::get_if<PointLight>(&light)) return own_direction_pdf(*point, w);
+  if (const auto* spot = std::get_if<SpotLight>(&light)) return own_direction_pdf(*spot, w);
+  return 0.f;
 }
 
 }  // namespace chlorovdb

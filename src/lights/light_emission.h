@@ -36,4 +36,9 @@ std::optional<LightEmission> sample_emission(const Light& light, Point2 u_positi
                                              float lambda_nm, const GeometryScene& scene,
                                              const EmissionTarget* target = nullptr, float u_aim = 1.f);
 
+// The solid-angle density of sample_emission's direction without a target, for
+// lights at a point (point: uniform sphere; spot: uniform in the outer cone);
+// 0 for any other light.
+float emission_direction_pdf(const Light& light, const Vec3& w);
+
 }  // namespace chlorovdb

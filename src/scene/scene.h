@@ -89,6 +89,10 @@ struct RenderSettings {
   bool skip_unneeded_work = true;
   ExcitationThroughGlass excitation_through_glass = ExcitationThroughGlass::connect;
   DirectLightThroughGlass direct_light_through_glass = DirectLightThroughGlass::connect;
+  // `full` mode with `connect`: excitation by light that lit diffuse surfaces
+  // reflect from point and spot lights, also sampled from the light's side
+  // (integrator/bounce_connection.h). Off only to measure it.
+  bool excitation_bounce = true;
   ContinuationDirections continuation_directions = ContinuationDirections::uniform;
   ExcitationEstimate excitation_estimate = ExcitationEstimate::rays;
   int64_t excitation_photons = 1 << 18;  // per fluorescent pigment and medium

@@ -109,6 +109,7 @@ RenderSettings read_render_settings(ParamReader& top, const SceneOverrides& o, s
                                      : direct == "all" ? DirectLightThroughGlass::all
                                                        : DirectLightThroughGlass::connect;
     }
+    s.excitation_bounce = r->get_bool("excitation_bounce", true);
     s.continuation_directions =
         r->get_enum("continuation_directions", "uniform", {"uniform", "guided"}) == "guided"
             ? ContinuationDirections::guided
@@ -426,6 +427,7 @@ void setup_fluorescence(Scene& scene, const std::string& mode) {
         fp.lights.push_back(int(l));
         fp.excitation.push_back(std::move(es));
         weights.push_back(w);
+        fp.lights_at_a_point |= std::holds_alternative<PointLight>(light) || std::holds_alternative<SpotLight>(light);
       }
       if (!fp.lights.empty()) fp.light_sampler = LightSampler(fp.lights, relative_weights(weights));
     }

@@ -16,20 +16,7 @@ namespace {
 // grey floor, a UVB panel to its left whose light reaches the liquid straight
 // (the glass connection) and from the floor in front of it (continuations).
 std::string cuvette_on_floor(const std::string& directions) {
-  return R"({
-  "length_unit": "cm",
-  "render": {"resolution": [8, 8], "spp": 1, "wavelengths": 4, "fluorescence": "full",
-             "continuation_directions": ")" + directions + R"(", "max_depth": 16},
-  "camera": {"type": "orthographic", "position": [0, 3, 20], "look_at": [0, 3, 0], "height": 6},
-  "pigments": {"dye": {"extinction": {"table": {"lambda": [279.999, 280, 330, 330.001],
-                                                "value": [0, 20000, 20000, 0]}},
-                       "quantum_yield": 0.5, "emission": {"gaussian": [650, 10]}}},
-  "materials": {"floor": {"type": "diffuse", "albedo": 0.5},
-                "glass": {"type": "dielectric", "ior": 1.5},
-                "glass_to_solution": {"type": "dielectric", "ior": 0.8913}},
-  "media": {"solution": {"solvent": {"rayleigh": false},
-                         "pigments": [{"pigment": "dye", "concentration": 5, "unit": "uM"}]}},
-  "shapes": [
+  return uvb_dye_scene_head(R"("continuation_directions": ")" + directions + R"(")") + R"(
     {"type": "quad", "corner": [-40, 0, -40], "edge_u": [0, 0, 80], "edge_v": [80, 0, 0], "material": "floor"},
     {"type": "box", "min": [-2.2, 0.001, -2.2], "max": [2.2, 6.4, 2.2], "material": "glass"},
     {"type": "box", "min": [-2.0, 0.2, -2.0], "max": [2.0, 6.2, 2.0], "material": "glass_to_solution",

@@ -38,6 +38,30 @@ inline std::string write_smooth_sphere(const std::string& name, float radius, in
   return path.string();
 }
 
+// The head of a centimetre scene of a UVB-only dye (absorbing 280–330 nm,
+// emitting at 650 nm) in `solution`, with a grey `floor`, `glass`,
+// `glass_to_solution` and an index-matched `boundary`, up to its open shapes
+// array; `render_keys` are added to the render block (`full` mode).
+inline std::string uvb_dye_scene_head(const std::string& render_keys) {
+  return R"({
+  "length_unit": "cm",
+  "render": {"resolution": [8, 8], "spp": 1, "wavelengths": 4, "fluorescence": "full", "max_depth": 16,
+             )" +
+         render_keys + R"(},
+  "camera": {"type": "orthographic", "position": [0, 3, 20], "look_at": [0, 3, 0], "height": 6},
+  "pigments": {"dye": {"extinction": {"table": {"lambda": [279.999, 280, 330, 330.001],
+                                                "value": [0, 20000, 20000, 0]}},
+                       "quantum_yield": 0.5, "emission": {"gaussian": [650, 10]}}},
+  "materials": {"floor": {"type": "diffuse", "albedo": 0.5},
+                "glass": {"type": "dielectric", "ior": 1.5},
+                "glass_to_solution": {"type": "dielectric", "ior": 0.8913},
+                "boundary": {"type": "interface"}},
+  "media": {"solution": {"solvent": {"rayleigh": false},
+                         "pigments": [{"pigment": "dye", "concentration": 5, "unit": "uM"}]}},
+  "shapes": [
+)";
+}
+
 // Mean and standard error of a scalar estimator.
 struct Estimate {
   double sum = 0, sum2 = 0;

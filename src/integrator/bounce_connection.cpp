@@ -1,0 +1,119 @@
+#include "integrator/bounce_connection.h"
+
+#include <cmath>
+
+#include "integrator/fluorescence_event.h"
+#include "lights/light_emission.h"
+#include "materials/bsdf.h"
+
+namespace chlorovdb {
+
+namespace {
+
+bool at_a_point(const Light& light) {
+  return std::holds_alternative<PointLight>(light) || std::holds_alternative<SpotLight>(light);
+}
+
+Vec3 light_position(const Light& light) {
+  if (const auto* point = std::get_if<PointLight>(&light)) return point->position;
+  return std::get<SpotLight>(light).position;
+}
+
+// Both strategies' densities for one path x → (glass) → z ← l at λ, per unit
+// area at z and per nm (the header's formulas).
+struct StrategyDensities {
+  float bounce = 0.f, continuation = 0.f;
+};
+StrategyDensities strategy_densities(const Scene& scene, const ContinuationOrigin& origin, int light_index,
+                                     float lambda_nm, const Vec3& z, const Vec3& ng, const RefractedPath& path) {
+  const FluorescentPigment& fp = *origin.fp;
+  const Light& light = scene.lights[light_index];
+  const int slot = fp.slot_of_light(light_index);
+  StrategyDensities p;
+  if (slot < 0 || !at_a_point(light)) return p;
+  const Vec3 to_light = light_position(light) - z;
+  const float d2 = dot(to_light, to_light);
+  const Vec3 wi = to_light / std::sqrt(d2);
+  p.bounce = fp.light_sampler.pmf(light_index) * excitation_pdf(fp.excitation[size_t(slot)], lambda_nm) *
+             emission_direction_pdf(light, -wi) * std::fabs(dot(wi, ng)) / d2;
+  if (origin.p_continue > 0.f)
+    p.continuation =
+        origin.p_continue * continuation_wavelength_pdf(fp, lambda_nm) *
+        continuation_direction_pdf(scene, origin.medium, origin.x, path.dir[0]) * path_fresnel(scene, path, lambda_nm) *
+        float(path.geometry * std::fabs(dot(ng, path.dir[path.count]))) * scene.light_sampler.pmf(light_index);
+  return p;
+}
+
+}  // namespace
+
+BounceExcitation bounce_excitation(const Scene& scene, const ContinuationOrigin& origin, float concentration, Rng& rng,
+                                   PathStats& stats) {
+  const FluorescentPigment& fp = *origin.fp;
+  BounceExcitation out;
+  if (fp.lights.empty()) return out;
+  const auto pick = fp.light_sampler.sample(rng.uniform());
+  if (!pick || pick->pmf == 0.f) return out;
+  const Light& light = scene.lights[pick->index];
+  const ExcitationSampler& es = fp.excitation[size_t(fp.slot_of_light(pick->index))];
+  float pdf_lambda;
+  const float lp = sample_excitation(es, rng.uniform(), &pdf_lambda);
+  out.lambda = lp;
+  const Point2 u_dir{rng.uniform(), rng.uniform()};
+  if (!at_a_point(light) || !(pdf_lambda > 0.f)) return out;
+  const auto emitted = sample_emission(light, Point2{}, u_dir, lp, scene.geometry);
+  if (!emitted) return out;
+
+  // The first surface the emitted ray meets (media boundaries pass).
+  Ray ray = emitted->ray;
+  std::optional<SurfaceHit> hit;
+  for (int crossings = 0; crossings < 256; ++crossings) {
+    hit = scene.geometry.intersect(ray, kInfinity);
+    if (!hit || !is_pass_through(scene, scene.shapes[hit->shape_id])) break;
+    ray = scene.geometry.spawn_ray(*hit, ray.d);
+  }
+  if (!hit) return out;
+  const ShapeBinding& binding = scene.shapes[hit->shape_id];
+  SampledWavelengths wl = SampledWavelengths::single(lp);
+  const Bsdf bsdf = make_bsdf(scene.materials[binding.material], *hit, wl);
+  if (bsdf.is_specular()) return out;
+  ++stats.excitation_rays;
+
+  PreparedMedia media(scene, wl);
+  const Vec3 wi = -ray.d;  // toward the light
+  const int medium_lit = dot(wi, hit->ng) > 0.f ? binding.medium_outside : binding.medium_inside;
+  // The light's leg as the shadow ray from z sees it (its media's transmittance).
+  const SampledSpectrum T_light =
+      connect_to_light(scene, ShadowOrigin{hit->p, medium_lit, &*hit}, LightTarget{wi, light_position(light), false},
+                       media, rng, ConnectionOptions{})
+          .T;
+  if (T_light[0] == 0.f) return out;
+  // Irradiance over the area density of z: Φ · |cos at the shading normal| / |cos at the geometric one|.
+  const float arriving = emitted->flux * T_light[0] * std::fabs(dot(wi, hit->ns)) / std::fabs(dot(wi, hit->ng));
+
+  const PathsToSurface paths = paths_to_surface_point(scene, origin.x, origin.medium, hit->p, hit->ng, media, rng);
+  float fluence = 0.f;
+  for (int i = 0; i < paths.count; ++i) {
+    const PathToSurface& p = paths.paths[size_t(i)];
+    const Vec3 wo = -p.path.dir[p.path.count];  // from z toward x's chain
+    const float f = bsdf.f(wo, wi)[0];
+    if (f == 0.f) continue;
+    const StrategyDensities d = strategy_densities(scene, origin, pick->index, lp, hit->p, hit->ng, p.path);
+    const float w = d.bounce / (d.bounce + d.continuation);
+    fluence += w * arriving * f * p.transport[0];
+  }
+  out.absorbed =
+      lp * kAbsorptionPerMolarExtinction * fp.epsilon(lp) * concentration * fluence / (pick->pmf * pdf_lambda);
+  return out;
+}
+
+float continuation_weight_against_bounce(const Scene& scene, const ContinuationOrigin& origin,
+                                         const SpecularChain& walked, const SurfaceHit& z, int light_index,
+                                         float lambda_nm) {
+  if (origin.fp->slot_of_light(light_index) < 0 || !at_a_point(scene.lights[light_index])) return 1.f;
+  const auto path = deterministic_solution(scene, origin.x, z.p, walked, lambda_nm);
+  if (!path) return 1.f;
+  const StrategyDensities d = strategy_densities(scene, origin, light_index, lambda_nm, z.p, z.ng, *path);
+  return d.continuation / (d.bounce + d.continuation);
+}
+
+}  // namespace chlorovdb
