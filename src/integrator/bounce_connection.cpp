@@ -86,9 +86,10 @@ BounceExcitation bounce_excitation(const Scene& scene, const ContinuationOrigin&
       connect_to_light(scene, ShadowOrigin{hit->p, medium_lit, &*hit}, LightTarget{wi, light_position(light), false},
                        media, rng, ConnectionOptions{})
           .T;
-  if (T_light[0] == 0.f) return out;
+  const float cos_ng = std::fabs(dot(wi, hit->ng));
+  if (T_light[0] == 0.f || cos_ng == 0.f) return out;
   // Irradiance over the area density of z: Φ · |cos at the shading normal| / |cos at the geometric one|.
-  const float arriving = emitted->flux * T_light[0] * std::fabs(dot(wi, hit->ns)) / std::fabs(dot(wi, hit->ng));
+  const float arriving = emitted->flux * T_light[0] * std::fabs(dot(wi, hit->ns)) / cos_ng;
 
   const PathsToSurface paths = paths_to_surface_point(scene, origin.x, origin.medium, hit->p, hit->ng, media, rng);
   float fluence = 0.f;
@@ -98,8 +99,8 @@ BounceExcitation bounce_excitation(const Scene& scene, const ContinuationOrigin&
     const float f = bsdf.f(wo, wi)[0];
     if (f == 0.f) continue;
     const StrategyDensities d = strategy_densities(scene, origin, pick->index, lp, hit->p, hit->ng, p.path);
-    const float w = d.bounce / (d.bounce + d.continuation);
-    fluence += w * arriving * f * p.transport[0];
+    if (!(d.bounce > 0.f)) continue;  // rounding put z's direction outside the cone it was drawn in
+    fluence += d.bounce / (d.bounce + d.continuation) * arriving * f * p.transport[0];
   }
   out.absorbed =
       lp * kAbsorptionPerMolarExtinction * fp.epsilon(lp) * concentration * fluence / (pick->pmf * pdf_lambda);
@@ -113,7 +114,7 @@ float continuation_weight_against_bounce(const Scene& scene, const ContinuationO
   const auto path = deterministic_solution(scene, origin.x, z.p, walked, lambda_nm);
   if (!path) return 1.f;
   const StrategyDensities d = strategy_densities(scene, origin, light_index, lambda_nm, z.p, z.ng, *path);
-  return d.continuation / (d.bounce + d.continuation);
+  return d.bounce > 0.f ? d.continuation / (d.bounce + d.continuation) : 1.f;
 }
 
 }  // namespace chlorovdb
