@@ -592,10 +592,9 @@ PathsToSurface paths_to_surface_point(const Scene& scene, const Vec3& x, int med
     p.transport = path_transmission(scene, x, medium, end, path, media, rng);
     if (p.transport.is_black()) continue;
     p.path = path;
-    p.fresnel = path_fresnel(scene, path, media.lambda()[0]);
-    p.solid_angle_per_area = path.geometry * std::fabs(dot(ng, path.dir[path.count]));
-    // Radiance compressed into the denser medium: (n_x / n_z)², n_x = 1 here.
-    p.transport *= float(p.solid_angle_per_area / (path.n[path.count] * path.n[path.count]));
+    // dω_0/dA_z, and radiance compressed into the denser medium: (n_x / n_z)², n_x = 1 here.
+    const double solid_angle_per_area = path.geometry * std::fabs(dot(ng, path.dir[path.count]));
+    p.transport *= float(solid_angle_per_area / (path.n[path.count] * path.n[path.count]));
     ++out.count;
   }
   return out;

@@ -175,21 +175,19 @@ bool connection_owns(const Scene& scene, const Vec3& x, const Vec3& y, const Spe
 // and legs cast plain rays from it; connection_owns' seeds must leave from it too).
 Vec3 connection_start(const Scene& scene, const ShadowOrigin& from, const Vec3& toward);
 
+// Π F_i of a solved path: Fresnel transmission at each face it crosses,
+// reflectance where it mirrors, at the shading normals (also the probability
+// that the path tracer's dielectrics choose those events).
+float path_fresnel(const Scene& scene, const RefractedPath& path, float lambda_nm);
 // The paths the deterministic chains solve from x (a medium point) to the point
 // z of a surface with geometric normal ng, no random seeds (the light a lit floor
 // sends through a vessel's glass; integrator/bounce_connection.h), each with
 // what it carries from z to x at the hero wavelength:
 //   transport = Π F_i · T_legs · (n_x / n_z)² · dω_0/dA_z,
-// dω_0/dA_z = dω_0/dA_⊥ · |cos θ_z| (solid angle at x per area at z), and Π F_i
-// alone (the probability that the path tracer's dielectrics choose those events).
+// dω_0/dA_z = dω_0/dA_⊥ · |cos θ_z| (solid angle at x per area at z).
 // Blocked paths are left out.
-// Π F_i of a solved path: Fresnel transmission at each face it crosses,
-// reflectance where it mirrors, at the shading normals.
-float path_fresnel(const Scene& scene, const RefractedPath& path, float lambda_nm);
 struct PathToSurface {
   RefractedPath path;
-  float fresnel = 0.f;
-  double solid_angle_per_area = 0;
   SampledSpectrum transport;
 };
 struct PathsToSurface {
