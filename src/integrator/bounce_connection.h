@@ -7,8 +7,8 @@
 // teapot_50uM_D65_UVB_aim2's fluorescence); this strategy samples it from the
 // light's side.
 //
-// At a fluorescence event x: a point or spot light l of the pigment (as its
-// excitation ray picks one), λ' from l's excitation table, a ray the light emits
+// At a fluorescence event x (one in two, kBounceProbability in the .cpp): a point
+// or spot light l of the pigment (as its excitation ray picks one), λ' from l's excitation table, a ray the light emits
 // (its own density, light_emission.h) to the first surface z it meets; when z
 // scatters diffusely, the paths the deterministic chains solve from x to z
 // (paths_to_surface_point: the straight line through the glass, its prefixes,
@@ -19,7 +19,7 @@
 // The continuation samples the same paths (x → glass → z, then z's shadow ray
 // to l), so both are weighed by the balance heuristic on their densities at z
 // per unit area, per nm:
-//   bounce:        pmf_pigment(l) · p(λ' | l) · p_ω(l → z) · |cos θ_z,l| / d²(l, z)
+//   bounce:        P_bounce · pmf_pigment(l) · p(λ' | l) · p_ω(l → z) · |cos θ_z,l| / d²(l, z)
 //   continuation:  P_continue · p_λ''(λ') · p_ω(x, ω_0) · Π F_i · dω_0/dA_z · pmf_scene(l)
 // (Π F_i: the probability that the path tracer's dielectrics choose those events;
 // Russian roulette and transmittance left out, the same in both, so the weights

@@ -76,7 +76,7 @@ double expect_the_same_light(Lamp lamp, bool glass) {
 
 TEST(BounceConnection, NearFloorLightIsCountedOnceThroughGlassAndOnAStraightLine) {
   // Both weights matter here: through glass, the bounce at full weight read
-  // 0.0717 and the continuations at full weight 0.0927, against 0.0631 ± 0.0012
+  // 0.0778 and the continuations at full weight 0.0870, against 0.0631 ± 0.0012
   // without the bounce (checked).
   expect_the_same_light(Lamp::over_a_table, true);
   expect_the_same_light(Lamp::over_a_table, false);
