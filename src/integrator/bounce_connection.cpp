@@ -18,15 +18,6 @@ namespace {
 // against 4.77 and 5.71 (docs/fluorescence.md).
 constexpr float kBounceProbability = 0.5f;
 
-bool at_a_point(const Light& light) {
-  return std::holds_alternative<PointLight>(light) || std::holds_alternative<SpotLight>(light);
-}
-
-Vec3 light_position(const Light& light) {
-  if (const auto* point = std::get_if<PointLight>(&light)) return point->position;
-  return std::get<SpotLight>(light).position;
-}
-
 // Both strategies' densities for one path x → (glass) → z ← l at λ, per unit
 // area at z and per nm (the header's formulas).
 struct StrategyDensities {
@@ -37,9 +28,10 @@ StrategyDensities strategy_densities(const Scene& scene, const ContinuationOrigi
   const FluorescentPigment& fp = *origin.fp;
   const Light& light = scene.lights[light_index];
   const int slot = fp.slot_of_light(light_index);
+  const auto position = light_position(light);
   StrategyDensities p;
-  if (slot < 0 || !at_a_point(light)) return p;
-  const Vec3 to_light = light_position(light) - z;
+  if (slot < 0 || !position) return p;
+  const Vec3 to_light = *position - z;
   const float d2 = dot(to_light, to_light);
   const Vec3 wi = to_light / std::sqrt(d2);
   p.bounce = kBounceProbability * fp.light_sampler.pmf(light_index) * excitation_pdf(fp.excitation[size_t(slot)], lambda_nm) *
@@ -67,7 +59,8 @@ BounceExcitation bounce_excitation(const Scene& scene, const ContinuationOrigin&
   const float lp = sample_excitation(es, rng.uniform(), &pdf_lambda);
   out.lambda = lp;
   const Point2 u_dir{rng.uniform(), rng.uniform()};
-  if (!at_a_point(light) || !(pdf_lambda > 0.f)) return out;
+  const auto position = light_position(light);
+  if (!position || !(pdf_lambda > 0.f)) return out;
   const auto emitted = sample_emission(light, Point2{}, u_dir, lp, scene.geometry);
   if (!emitted) return out;
 
@@ -90,10 +83,9 @@ BounceExcitation bounce_excitation(const Scene& scene, const ContinuationOrigin&
   const Vec3 wi = -ray.d;  // toward the light
   const int medium_lit = dot(wi, hit->ng) > 0.f ? binding.medium_outside : binding.medium_inside;
   // The light's leg as the shadow ray from z sees it (its media's transmittance).
-  const SampledSpectrum T_light =
-      connect_to_light(scene, ShadowOrigin{hit->p, medium_lit, &*hit}, LightTarget{wi, light_position(light), false},
-                       media, rng, ConnectionOptions{})
-          .T;
+  const SampledSpectrum T_light = connect_to_light(scene, ShadowOrigin{hit->p, medium_lit, &*hit},
+                                                   LightTarget{wi, *position, false}, media, rng, ConnectionOptions{})
+                                      .T;
   const float cos_ng = std::fabs(dot(wi, hit->ng));
   if (T_light[0] == 0.f || cos_ng == 0.f) return out;
   // Irradiance over the area density of z: Φ · |cos at the shading normal| / |cos at the geometric one|.
@@ -118,7 +110,7 @@ BounceExcitation bounce_excitation(const Scene& scene, const ContinuationOrigin&
 float continuation_weight_against_bounce(const Scene& scene, const ContinuationOrigin& origin,
                                          const SpecularChain& walked, const SurfaceHit& z, int light_index,
                                          float lambda_nm) {
-  if (origin.fp->slot_of_light(light_index) < 0 || !at_a_point(scene.lights[light_index])) return 1.f;
+  if (origin.fp->slot_of_light(light_index) < 0 || !light_position(scene.lights[light_index])) return 1.f;
   const auto path = deterministic_solution(scene, origin.x, z.p, walked, lambda_nm);
   if (!path) return 1.f;
   const StrategyDensities d = strategy_densities(scene, origin, light_index, lambda_nm, z.p, z.ng, *path);

@@ -429,6 +429,12 @@ SampledSpectrum path_transmission(const Scene& scene, const Vec3& x, int medium,
   return weight;
 }
 
+// dω_0/dA_⊥ with the radiance compressed into the denser medium at x:
+// (n_x / n_end)², n_x = 1 in the path's relative indices.
+double compressed_geometry(const RefractedPath& path) {
+  return path.geometry / (path.n[path.count] * path.n[path.count]);
+}
+
 // Light arriving at x from `light` along one solved path, per lane of
 // media.lambda(): radiance times solid angle (the fluence rate it brings), with
 // path_transmission and the generalised geometry term. Zero when blocked.
@@ -442,8 +448,7 @@ SampledSpectrum refracted_path_light(const Scene& scene, const Vec3& x, int medi
     const auto& distant = std::get<DistantLight>(light);
     return distant.L.sample(wl) * (distant.scale * float(path.geometry)) * weight;
   }
-  // Radiance compressed into the denser medium: (n_x / n_light)², n_x = 1 here.
-  const float g = float(path.geometry / (path.n[path.count] * path.n[path.count]));
+  const float g = float(compressed_geometry(path));
   if (const auto* area = std::get_if<AreaLight>(&light))
     return Le_area(*area, end.n, -d_last, wl) * (g * std::fabs(dot(end.n, d_last)) / end.pdf_area) * weight;
   if (const auto* point = std::get_if<PointLight>(&light)) return point->I.sample(wl) * (point->scale * g) * weight;
@@ -592,9 +597,7 @@ PathsToSurface paths_to_surface_point(const Scene& scene, const Vec3& x, int med
     p.transport = path_transmission(scene, x, medium, end, path, media, rng);
     if (p.transport.is_black()) continue;
     p.path = path;
-    // dω_0/dA_z, and radiance compressed into the denser medium: (n_x / n_z)², n_x = 1 here.
-    const double solid_angle_per_area = path.geometry * std::fabs(dot(ng, path.dir[path.count]));
-    p.transport *= float(solid_angle_per_area / (path.n[path.count] * path.n[path.count]));
+    p.transport *= float(compressed_geometry(path) * std::fabs(dot(ng, path.dir[path.count])));
     ++out.count;
   }
   return out;
@@ -612,10 +615,8 @@ std::optional<ArrivingLight> light_through_dielectrics(const Scene& scene, const
   if (const auto* area = std::get_if<AreaLight>(&light)) {
     const ShapeSample ss = scene.geometry.sample_area(area->shape_id, u);
     end.y = ss.p, end.n = ss.n, end.pdf_area = ss.pdf_area;
-  } else if (const auto* point = std::get_if<PointLight>(&light)) {
-    end.y = point->position;
-  } else if (const auto* spot = std::get_if<SpotLight>(&light)) {
-    end.y = spot->position;
+  } else if (const auto position = light_position(light)) {
+    end.y = *position;
   } else {
     end.y = -std::get<DistantLight>(light).direction;  // toward the light
   }

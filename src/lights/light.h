@@ -23,6 +23,13 @@ inline bool is_delta(const Light& light) {
          std::holds_alternative<DistantLight>(light);
 }
 
+// Where a light at a point (point, spot) is; nullopt for any other light.
+inline std::optional<Vec3> light_position(const Light& light) {
+  if (const auto* point = std::get_if<PointLight>(&light)) return point->position;
+  if (const auto* spot = std::get_if<SpotLight>(&light)) return spot->position;
+  return std::nullopt;
+}
+
 // Once after the scene is built: normalises directions, and gives lights at
 // infinity the scene's bounding sphere (for shadow-ray end points and power).
 void preprocess(Light& light, const Bounds3& scene_bounds);
