@@ -58,6 +58,14 @@ void tangent_frame(const Vec3d& n, Vec3d* s, Vec3d* t) {
 
 constexpr int kMaxUnknowns = 2 * kMaxSpecularChain;
 constexpr int kMaxNewtonSteps = 12;  // converging solves take ~3-6; the rest rarely recover
+// From the third step on, a step that lowers the residual by less than this
+// factor ends the solve: a chain with no solution creeps toward a residual
+// minimum above zero, while converging solves are quadratic by then. On
+// glass_UVB_5uM_Q0.23 failing solves took 64 % of the re-projections; stopping
+// them so took 13 % off its render time (the teapot's 15 %) and gave up 0.8 %
+// of the solutions (docs/fluorescence.md).
+constexpr double kStagnationFactor = 0.9;
+constexpr int kFirstStagnationCheck = 3;
 // Converged when every |h_tangential| / (η_a + η_b) (the sine of the angle
 // error, roughly) is below this; quadratic convergence usually ends far below.
 constexpr double kConstraintTolerance = 1e-7;
@@ -294,6 +302,7 @@ std::optional<RefractedPath> solve_manifold_path(const Scene& scene, const Specu
     if (!solve_linear(J, m, rhs, 1)) return std::nullopt;
     for (int i = 0; i < m; ++i) step[i] = rhs[i];
     // Step control: halve until the re-projected chain lowers the residual.
+    const double r_before = r;
     bool accepted = false;
     for (int halvings = 0; halvings < 6 && !accepted; ++halvings, beta *= 0.5) {
       Manifold trial = M;
@@ -313,6 +322,7 @@ std::optional<RefractedPath> solve_manifold_path(const Scene& scene, const Specu
     if (!accepted) return std::nullopt;
     beta = std::min(1.0, 4 * beta);  // undo the loop's last halving, then grow back
     converged = r < kConstraintTolerance;
+    if (!converged && it + 1 >= kFirstStagnationCheck && r > kStagnationFactor * r_before) return std::nullopt;
     if (!converged) M.residual(&c, &J, nullptr, nullptr, nullptr, nullptr);
   }
   if (!converged) return std::nullopt;
