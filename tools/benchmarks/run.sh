@@ -87,6 +87,11 @@ variants_for() {  # $1 scene file
       # Photons with camera connections to area lights through glass: the pair that
       # gives both layers the Monte Carlo rate on the glass scenes (docs/fluorescence.md).
       echo "excitation_estimate=photons+direct=all|--set render.excitation_estimate=photons --set render.direct_light_through_glass=all"
+      # The bounce connection (light a point or spot lamp sends off lit surfaces
+      # into the glass) off, to measure what it buys.
+      if grep -Eq '"type"[[:space:]]*:[[:space:]]*"(point|spot)"' "$1"; then
+        echo "excitation_bounce=false|--set render.excitation_bounce=false"
+      fi
     fi
   fi
   # Camera next-event estimation through glass to area lights too (not only delta lights).
@@ -291,7 +296,9 @@ its time) and, in scenes with glass, the excitation rays stopped at glass
 (\`excitation_through_glass=fresnel\`, an approximation) instead of solving for the refracted
 paths; in scenes with glass, camera paths connected through it to area lights too
 (\`direct_light_through_glass=all\`, by the straight line's solve) and that with photons
-(\`excitation_estimate=photons+direct=all\`); wavelengths per
+(\`excitation_estimate=photons+direct=all\`); where glass meets point or spot lamps, the bounce
+connection off (\`excitation_bounce=false\`: the light the lamps send off lit surfaces into the
+glass left to continuations alone); wavelengths per
 path (\`--wavelengths\`); the camera's wavelengths drawn from the eye's density alone instead of the
 scene's mixture of it with the lights' spectra and the pigments' re-emission
 (\`camera_wavelengths=visible\`, \`--set render.camera_wavelengths=visible\`); and the renderer's skips of unneeded work
