@@ -866,8 +866,10 @@ TEST(SpecularConnection, DirectLightLanesFollowTheGlassDispersion) {
 // do, so the share none of kSeeds random seeds reaches either bounds what a
 // delta light misses (a solution reached with probability p < 1/kSeeds may be
 // counted as unreached). Measured (docs/fluorescence.md): not found by the
-// straight line flask 1.3 %, beaker 12.7 %, teapot 13.2 %, mostly straight
-// lines that cross another number of faces than the path.
+// straight line flask 1.5 %, beaker 11.7 %, teapot 12.5 %, mostly straight
+// lines that cross another number of faces than the path. The bounds sit a
+// little above: a solver that gives up on converging solves (a Newton early
+// stop at a 0.3 gain instead of 0.9 reads 2.9 %, 13.3 %, 14.8 %) fails them.
 constexpr int kSeeds = 256;
 struct MissedShare {
   double missed = 0, unreached = 0, total = 0;
@@ -936,9 +938,9 @@ TEST(SpecularManifold, FindsTheTransmissionPathsOfVesselGlass) {
   };
   const auto source = std::filesystem::path(CHLOROVDB_SOURCE_DIR) / "scenes";
   std::vector<Vessel> vessels;
-  vessels.push_back({"smooth flask", load_scene(write_scene("manifold_missed", flask_scene("]"))), 0.02f, 0.03, 0.005});
-  vessels.push_back({"beaker", load_scene(source / "glass_UVB_5uM_Q0.23.json"), 0.01f, 0.2, 0.04});
-  vessels.push_back({"teapot", load_scene(source / "teapot_50uM_D65_UVB_aim2.json"), 0.01f, 0.2, 0.03});
+  vessels.push_back({"smooth flask", load_scene(write_scene("manifold_missed", flask_scene("]"))), 0.02f, 0.02, 0.005});
+  vessels.push_back({"beaker", load_scene(source / "glass_UVB_5uM_Q0.23.json"), 0.01f, 0.13, 0.04});
+  vessels.push_back({"teapot", load_scene(source / "teapot_50uM_D65_UVB_aim2.json"), 0.01f, 0.14, 0.03});
   for (const Vessel& v : vessels) {
     int liquid = -1;
     for (size_t s = 0; s < v.scene.shapes.size(); ++s)
