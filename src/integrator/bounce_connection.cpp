@@ -34,8 +34,9 @@ StrategyDensities strategy_densities(const Scene& scene, const ContinuationOrigi
   const Vec3 to_light = *position - z;
   const float d2 = dot(to_light, to_light);
   const Vec3 wi = to_light / std::sqrt(d2);
-  p.bounce = kBounceProbability * fp.light_sampler.pmf(light_index) * excitation_pdf(fp.excitation[size_t(slot)], lambda_nm) *
-             emission_direction_pdf(light, -wi) * std::fabs(dot(wi, ng)) / d2;
+  p.bounce = kBounceProbability * fp.light_sampler.pmf(light_index) *
+             excitation_pdf(fp.excitation[size_t(slot)], lambda_nm) * emission_direction_pdf(light, -wi) *
+             std::fabs(dot(wi, ng)) / d2;
   if (origin.p_continue > 0.f)
     p.continuation =
         origin.p_continue * continuation_wavelength_pdf(fp, lambda_nm) *

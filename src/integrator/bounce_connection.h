@@ -8,8 +8,9 @@
 // light's side.
 //
 // At a fluorescence event x (one in two, kBounceProbability in the .cpp): a point
-// or spot light l of the pigment (as its excitation ray picks one), λ' from l's excitation table, a ray the light emits
-// (its own density, light_emission.h) to the first surface z it meets; when z
+// or spot light l of the pigment (as its excitation ray picks one), λ' from l's
+// excitation table, a ray the light emits (its own density, light_emission.h)
+// to the first surface z it meets; when z
 // scatters diffusely, the paths the deterministic chains solve from x to z
 // (paths_to_surface_point: the straight line through the glass, its prefixes,
 // the vessel's walls) carry z's reflected light to x:

@@ -427,7 +427,7 @@ void setup_fluorescence(Scene& scene, const std::string& mode) {
         fp.lights.push_back(int(l));
         fp.excitation.push_back(std::move(es));
         weights.push_back(w);
-        fp.lights_at_a_point |= std::holds_alternative<PointLight>(light) || std::holds_alternative<SpotLight>(light);
+        fp.lights_at_a_point |= light_position(light).has_value();
       }
       if (!fp.lights.empty()) fp.light_sampler = LightSampler(fp.lights, relative_weights(weights));
     }
