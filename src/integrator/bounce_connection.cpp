@@ -37,11 +37,9 @@ StrategyDensities strategy_densities(const Scene& scene, const ContinuationOrigi
   p.bounce = kBounceProbability * fp.light_sampler.pmf(light_index) *
              excitation_pdf(fp.excitation[size_t(slot)], lambda_nm) * emission_direction_pdf(light, -wi) *
              std::fabs(dot(wi, ng)) / d2;
-  if (origin.p_continue > 0.f)
-    p.continuation =
-        origin.p_continue * continuation_wavelength_pdf(fp, lambda_nm) *
-        continuation_direction_pdf(scene, origin.medium, origin.x, path.dir[0]) * path_fresnel(scene, path, lambda_nm) *
-        float(path.geometry * std::fabs(dot(ng, path.dir[path.count]))) * scene.light_sampler.pmf(light_index);
+  p.continuation =
+      continuation_path_density(scene, origin, path.dir[0], lambda_nm, path_fresnel(scene, path, lambda_nm)) *
+      float(path.geometry * std::fabs(dot(ng, path.dir[path.count]))) * scene.light_sampler.pmf(light_index);
   return p;
 }
 

@@ -28,20 +28,10 @@
 // faces, seeds' finds), area and distant lights stay with the continuation alone.
 #include "core/rng.h"
 #include "core/vec.h"
-#include "fluorescence/fluorescent_pigment.h"
+#include "integrator/excitation_connection.h"
 #include "integrator/path_tracer.h"
-#include "integrator/specular_connection.h"
 
 namespace chlorovdb {
-
-// A fluorescence event as an excitation continuation starts from it: where it
-// is and the probability that a continuation leaves it (0: none does).
-struct ContinuationOrigin {
-  Vec3 x;
-  int medium = -1;
-  const FluorescentPigment* fp = nullptr;
-  float p_continue = 0.f;
-};
 
 // One bounce sample at the event: λ'·μ_a·Φ absorbed at x per unit
 // concentration-free weight (lp·k·ε(lp)·c·fluence / (pmf · p(λ'))), MIS-weighted,

@@ -50,7 +50,8 @@ ContinuationGuide train_medium(const Scene& scene, int medium, const GuideTraini
           const float eps = fp.epsilon(lp);
           const Vec3 dir = direction_in_bin(bin, Point2{rng.uniform(), rng.uniform()});
           if (eps == 0.f || !(pdf_lambda > 0.f)) continue;
-          const float L = continuation_radiance(scene, x, medium, dir, lp, rng, stats, 0);
+          const ContinuationOrigin origin{x, medium, &fp, continuation_probability(0, 0)};
+          const float L = continuation_radiance(scene, origin, dir, lp, rng, stats, 0);
           const float v = lp * eps * L / pdf_lambda;
           if (std::isfinite(v) && v > 0.f) w[size_t(bin)] += v * v;
         }

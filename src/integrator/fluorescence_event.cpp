@@ -5,23 +5,12 @@
 
 #include "core/sampling.h"
 #include "integrator/bounce_connection.h"
-#include "integrator/specular_connection.h"
+#include "integrator/excitation_connection.h"
 
 namespace chlorovdb {
 
 namespace {
 
-// Full mode continues an excitation path at an event with probability
-//   P = 0.5^(depth + 1) / (1 + k)^2,
-// depth the nesting level and k the continuations this path already spawned.
-// Each coin is weighted by its own P (unbiased: k depends only on earlier
-// coins). A fixed P made scattering media a supercritical branching process
-// (every one of ~30 segments of a τ = 30 path spawning sub-paths that spawn
-// again); with this P a path's expected offspring stays below 0.82 · 0.5^depth.
-// Nesting is also capped at 8 so no recursion is unbounded.
-float continuation_probability(int depth, int spawned) {
-  return std::ldexp(1.f, -(depth + 1)) / float((1 + spawned) * (1 + spawned));
-}
 constexpr int kMaxContinuationDepth = 8;
 // The continuation's λ'' mixture: the lights' excitation tables, the
 // reabsorption tables (emission·ε: re-emitted light), and a uniform share over
@@ -111,8 +100,12 @@ float distance_to_scene_exit(const Scene& scene, const Ray& ray) {
 
 // Fluence-weighted absorption  λ'·μ_a(x,λ')·Φ̂(x,λ')  from light sources only:
 // one light, one point on it, λ' ∝ S·ε·λ', the excitation ray at λ'.
-float direct_excitation(const Scene& scene, const FluorescentPigment& fp, const Vec3& x, int medium, float c, Rng& rng,
-                        PathStats& stats, float* lambda_excitation) {
+// `origin`: the event, for sharing the paths through glass with its continuation.
+float direct_excitation(const Scene& scene, const ContinuationOrigin& origin, float c, Rng& rng, PathStats& stats,
+                        float* lambda_excitation) {
+  const FluorescentPigment& fp = *origin.fp;
+  const Vec3& x = origin.x;
+  const int medium = origin.medium;
   if (fp.lights.empty()) return 0.f;
   const auto pick = fp.light_sampler.sample(rng.uniform());
   if (!pick) return 0.f;
@@ -125,7 +118,7 @@ float direct_excitation(const Scene& scene, const FluorescentPigment& fp, const 
   const Point2 u_light{rng.uniform(), rng.uniform()};
   if (scene.settings.excitation_through_glass == ExcitationThroughGlass::connect) {
     PreparedMedia media(scene, wl);
-    if (const auto fluence = connect_through_dielectrics(scene, x, medium, pick->index, u_light, media, rng)) {
+    if (const auto fluence = connect_through_dielectrics(scene, x, medium, pick->index, u_light, media, rng, &origin)) {
       ++stats.excitation_rays;
       return lp * kAbsorptionPerMolarExtinction * fp.epsilon(lp) * c * *fluence / (pick->pmf * pdf_lambda);
     }
@@ -157,9 +150,11 @@ float direct_excitation(const Scene& scene, const FluorescentPigment& fp, const 
 // Same quantity for the fluence that did not come straight from a light:
 // an excitation path at λ'' in a direction from the medium's continuation guide
 // (uniform where it has none).
-float indirect_excitation(const Scene& scene, const FluorescentPigment& fp, const Vec3& x, int medium, float c,
-                          Rng& rng, PathStats& stats, int depth, float p_continue, const ContinuationOrigin* origin,
-                          float* lambda_excitation) {
+float indirect_excitation(const Scene& scene, const ContinuationOrigin& origin, float c, Rng& rng, PathStats& stats,
+                          int depth, float* lambda_excitation) {
+  const FluorescentPigment& fp = *origin.fp;
+  const Vec3& x = origin.x;
+  const int medium = origin.medium;
   float pdf_lambda;
   const float lp = sample_continuation_wavelength(fp, rng, &pdf_lambda);
   *lambda_excitation = lp;
@@ -172,12 +167,16 @@ float indirect_excitation(const Scene& scene, const FluorescentPigment& fp, cons
   const Point2 u{rng.uniform(), rng.uniform()};
   const DirectionSample dir =
       guide ? guide->sample(x, u_mix, u) : DirectionSample{sample_uniform_sphere(u), uniform_sphere_pdf()};
-  const float radiance = continuation_radiance(scene, x, medium, dir.w, lp, rng, stats, depth, origin);
-  const float fluence = radiance / (dir.pdf * pdf_lambda * p_continue);
+  const float radiance = continuation_radiance(scene, origin, dir.w, lp, rng, stats, depth);
+  const float fluence = radiance / (dir.pdf * pdf_lambda * origin.p_continue);
   return lp * kAbsorptionPerMolarExtinction * eps * c * fluence;
 }
 
 }  // namespace
+
+float continuation_probability(int depth, int spawned) {
+  return std::ldexp(1.f, -(depth + 1)) / float((1 + spawned) * (1 + spawned));
+}
 
 float continuation_wavelength_pdf(const FluorescentPigment& fp, float lambda) {
   if (!(lambda >= kLambdaMinUV && lambda < kLambdaMax)) return 0.f;
@@ -211,15 +210,14 @@ float continuation_direction_pdf(const Scene& scene, int medium, const Vec3& x, 
   return guide ? guide->pdf(x, w) : uniform_sphere_pdf();
 }
 
-float continuation_radiance(const Scene& scene, const Vec3& x, int medium, const Vec3& w, float lambda, Rng& rng,
-                            PathStats& stats, int depth, const ContinuationOrigin* origin) {
+float continuation_radiance(const Scene& scene, const ContinuationOrigin& origin, const Vec3& w, float lambda, Rng& rng,
+                            PathStats& stats, int depth) {
   SampledWavelengths wl = SampledWavelengths::single(lambda);
   PathOptions options;
   options.skip_emitters_on_first_segment = true;
-  options.skip_emitters_the_connection_owns = scene.settings.excitation_through_glass == ExcitationThroughGlass::connect;
   options.fluorescence_depth = depth + 1;
-  options.continuation_origin = origin;
-  const PathRadiance sub = trace_path_from(scene, Ray{x, w}, medium, wl, rng, stats, options);
+  options.continuation_origin = &origin;
+  const PathRadiance sub = trace_path_from(scene, Ray{origin.x, w}, origin.medium, wl, rng, stats, options);
   return sub.fluorescence[0] + sub.other[0];
 }
 
@@ -286,24 +284,23 @@ SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, 
           add_emission(kAbsorptionPerMolarExtinction * c * absorbed.profile * absorbed.values[b], ExcitationGrid::bin_center(b));
     return T * j / (ds.pdf * p_pigment);
   }
-  float lp = 0.f;
-  const float direct = direct_excitation(scene, fp, x, medium, c, rng, stats, &lp);
-  add_emission(direct, lp);
   const bool may_continue = scene.settings.fluorescence == FluorescenceMode::full && depth < kMaxContinuationDepth;
   const float p_continue = may_continue ? continuation_probability(depth, *continuations) : 0.f;
   // Light a lit diffuse surface sends in through the glass, sampled from the
   // lamp's side too (bounce_connection.h), where the continuation reaches it.
   const bool bounce = may_continue && scene.settings.excitation_bounce && fp.lights_at_a_point &&
                       scene.settings.excitation_through_glass == ExcitationThroughGlass::connect;
-  const ContinuationOrigin origin{x, medium, &fp, p_continue};
+  const ContinuationOrigin origin{x, medium, &fp, p_continue, bounce};
+  float lp = 0.f;
+  const float direct = direct_excitation(scene, origin, c, rng, stats, &lp);
+  add_emission(direct, lp);
   if (bounce) {
     const BounceExcitation b = bounce_excitation(scene, origin, c, rng, stats);
     add_emission(b.absorbed, b.lambda);
   }
   if (may_continue && rng.uniform() < p_continue) {
     ++*continuations;
-    const float indirect =
-        indirect_excitation(scene, fp, x, medium, c, rng, stats, depth, p_continue, bounce ? &origin : nullptr, &lp);
+    const float indirect = indirect_excitation(scene, origin, c, rng, stats, depth, &lp);
     add_emission(indirect, lp);
   }
 

@@ -1,6 +1,7 @@
 #pragma once
 // The fluorescence source term (docs/physics.md §3) along a camera path.
 #include "core/rng.h"
+#include "integrator/excitation_connection.h"
 #include "integrator/path_tracer.h"
 #include "integrator/transport.h"
 
@@ -20,6 +21,16 @@ SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, 
                                             PreparedMedia& media, Rng& rng, PathStats& stats, int depth,
                                             int* continuations);
 
+// Full mode continues an excitation path at an event with probability
+//   P = 0.5^(depth + 1) / (1 + k)^2,
+// depth the nesting level and k the continuations this path already spawned.
+// Each coin is weighted by its own P (unbiased: k depends only on earlier
+// coins). A fixed P made scattering media a supercritical branching process
+// (every one of ~30 segments of a τ = 30 path spawning sub-paths that spawn
+// again); with this P a path's expected offspring stays below 0.82 · 0.5^depth.
+// Nesting is also capped at 8 so no recursion is unbounded.
+float continuation_probability(int depth, int spawned);
+
 // An excitation continuation's wavelength λ'': a mixture of the pigment's
 // lights' excitation tables (75 %, by their selection probability), its
 // reabsorption tables (20 %, emission·ε: re-emitted light is found where the
@@ -29,14 +40,15 @@ SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, 
 float sample_continuation_wavelength(const FluorescentPigment& fp, Rng& rng, float* pdf);
 // That mixture's density at λ (per nm).
 float continuation_wavelength_pdf(const FluorescentPigment& fp, float lambda);
-// Radiance at λ arriving at x (in `medium`) from direction w that an excitation
-// continuation counts: no emitter on the first segment (the excitation ray
-// counts those), nor the paths the glass connection owns; nested events at
-// depth + 1. Training the continuation guides probes the same quantity.
-// `origin` (may be null): the event, when the bounce connection also samples
-// the light lit diffuse surfaces send it (the continuation then weighs those paths).
-float continuation_radiance(const Scene& scene, const Vec3& x, int medium, const Vec3& w, float lambda, Rng& rng,
-                            PathStats& stats, int depth, const ContinuationOrigin* origin = nullptr);
+// Radiance at λ arriving at the event origin.x (in origin.medium) from
+// direction w that an excitation continuation counts: no emitter on the first
+// segment (the excitation ray counts those), the paths through glass to area
+// lights by their share against the excitation connection
+// (excitation_connection.h), the light lit diffuse surfaces send by its share
+// against the bounce connection (origin.bounce); nested events at depth + 1.
+// Training the continuation guides probes the same quantity.
+float continuation_radiance(const Scene& scene, const ContinuationOrigin& origin, const Vec3& w, float lambda, Rng& rng,
+                            PathStats& stats, int depth);
 // The solid-angle density of a continuation's direction w from x: the medium's
 // continuation guide's, uniform over the sphere without one.
 float continuation_direction_pdf(const Scene& scene, int medium, const Vec3& x, const Vec3& w);

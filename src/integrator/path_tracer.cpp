@@ -27,9 +27,9 @@ struct ScatterVertex {
 // them there. Area lights through glass come from BSDF-sampled paths, or with
 // `area_through_glass` also from the same solve toward a point on the light
 // (the floor's caustic of a lamp seen through a vessel): the path tracer then
-// drops the BSDF-sampled paths the connection owns (connection_owns), as
-// excitation continuations do, and the shadow ray keeps the straight line
-// where it crosses no glass (MIS with BSDF sampling).
+// drops the BSDF-sampled paths the connection solves (solved_deterministically),
+// and the shadow ray keeps the straight line where it crosses no glass (MIS
+// with BSDF sampling).
 // SMS's random seeds run at one in four of these connections, weighted by 4:
 // every diffuse vertex pays for a seed, most find nothing, and the caustic's
 // relMSE × time came out 1.3× lower than at every connection (glass ball on a
@@ -39,7 +39,7 @@ struct ScatterVertex {
 constexpr SeedPolicy kCameraSeeds{0.25f, false};
 // Area lights: the deterministic solves alone (the straight line's chain and its
 // prefixes), every other path left to BSDF sampling, which reaches an area light
-// by itself (connection_owns without seeds). SMS's seeds toward a light box found
+// by itself (the path tracer drops what the chains solve). SMS's seeds toward a light box found
 // rare solutions weighted by counts up to 1024 × 4: with them the beaker's total
 // layer had its worst 0.1 % of pixels hold up to 76 % of the squared error and
 // 3.4× the relMSE × time; without, 15 %, and default.json's total layer gained 1.25×
@@ -113,8 +113,8 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
   Vec3 segment_start = ray.o;
   SurfaceHit prev_hit;  // storage for prev.origin.hit
   // Specular glass events (crossings and mirror reflections) since the walk's
-  // origin while nothing else happened: the chain connection_owns() compares with
-  // the connection's. The origin is the path's start (an excitation
+  // origin while nothing else happened: the chain compared with the
+  // connection's solves. The origin is the path's start (an excitation
   // continuation: the excitation connection owns even a clear straight line) or,
   // with area lights connected through glass, the last scattering vertex (its
   // shadow ray samples the clear straight line itself).
@@ -123,14 +123,16 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
   const bool area_through_glass =
       direct_through_glass && scene.settings.direct_light_through_glass == DirectLightThroughGlass::all;
   // The walk's origin as the connection sees it (a surface origin's hit is kept
-  // in walk_hit: the connection and connection_owns' seeds start off its surface).
+  // in walk_hit: the connection and its seeds start off its surface).
   SurfaceHit walk_hit;
   ShadowOrigin walk_from{ray.o, medium, nullptr};
   SpecularChain walked;
-  bool walked_only_glass = options.skip_emitters_the_connection_owns;
-  // From the continuation's origin the other strategy is the excitation
-  // connection: it owns even a clear straight line, and seeds.
-  bool walk_from_excitation_origin = options.skip_emitters_the_connection_owns;
+  // From an excitation continuation's origin the other strategy is the
+  // excitation connection: its share covers its random seeds' finds too.
+  const bool shares_with_excitation_connection =
+      options.continuation_origin && scene.settings.excitation_through_glass == ExcitationThroughGlass::connect;
+  bool walked_only_glass = shares_with_excitation_connection;
+  bool walk_from_excitation_origin = shares_with_excitation_connection;
   const auto start_walk = [&](const ShadowOrigin& at) {
     walk_from = at;
     if (at.hit) {
@@ -283,12 +285,20 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
     }
 
     const ShapeBinding& binding = scene.shapes[hit->shape_id];
-    if (binding.area_light >= 0 &&
-        !(walked_only_glass && (walked.count > 0 || walk_from_excitation_origin) &&
-          connection_owns(scene, connection_start(scene, walk_from, hit->p - walk_from.p), hit->p, walked, lambda[0],
-                          rng, walk_from_excitation_origin)))
-      add_emitted(Le_area(std::get<AreaLight>(scene.lights[binding.area_light]), hit->ng, -ray.d, lambda),
-                  binding.area_light, &*hit);
+    if (binding.area_light >= 0) {
+      // The share of the light left to this path when a connection also solves it.
+      float share = 1.f;
+      if (walked_only_glass && walk_from_excitation_origin)
+        share = continuation_weight_against_connection(scene, *options.continuation_origin, walked, hit->p, hit->ng,
+                                                       binding.area_light, lambda[0], rng);
+      else if (walked_only_glass && walked.count > 0 &&
+               solved_deterministically(scene, connection_start(scene, walk_from, hit->p - walk_from.p), hit->p, walked,
+                                        lambda[0]))
+        share = 0.f;
+      if (share > 0.f)
+        add_emitted(Le_area(std::get<AreaLight>(scene.lights[binding.area_light]), hit->ng, -ray.d, lambda) * share,
+                    binding.area_light, &*hit);
+    }
 
     if (is_pass_through(scene, binding)) {
       // A medium boundary: cross it without a bounce.
@@ -307,7 +317,8 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
     if (!bsdf.is_specular()) {
       // A continuation's first diffuse vertex, reached from its event through
       // glass alone: the bounce connection samples the same paths from the light.
-      const bool weigh_against_bounce = options.continuation_origin && walk_from_excitation_origin && walked_only_glass;
+      const bool weigh_against_bounce =
+          walk_from_excitation_origin && options.continuation_origin->bounce && walked_only_glass;
       L.other += beta * sample_direct_light(
                             scene, v, r_u, media, rng, direct_through_glass, area_through_glass,
                             [&](const Vec3& wi) {

@@ -7,7 +7,7 @@
 
 namespace chlorovdb {
 
-struct ContinuationOrigin;  // integrator/bounce_connection.h
+struct ContinuationOrigin;  // integrator/excitation_connection.h
 
 // Radiance split by origin: light that went through at least one fluorescence
 // event, and everything else. Their sum is the image.
@@ -30,16 +30,14 @@ struct PathOptions {
   // light reaching it straight from the emitters is already counted by the
   // excitation ray, so its first segment ignores emitters.
   bool skip_emitters_on_first_segment = false;
-  // With excitation_through_glass = connect the excitation ray also owns the
-  // paths to area lights through glass that its solver finds from their own
-  // endpoint (connection_owns in integrator/specular_connection.h): the
-  // continuation ignores those. Paths are single-wavelength (λ = lambda[0]).
-  bool skip_emitters_the_connection_owns = false;
   int fluorescence_depth = 0;  // nesting of excitation continuations
-  // The event an excitation continuation left, when the bounce connection
-  // (bounce_connection.h) also samples what lit diffuse surfaces send it: the
-  // shadow ray of the first diffuse vertex reached through glass alone weighs
-  // its straight light from a point or spot light against it.
+  // An excitation continuation: the event it left. With
+  // excitation_through_glass = connect, the paths it walks from there through
+  // glass alone to an area light count by their share against the excitation
+  // connection (integrator/excitation_connection.h; paths are single-wavelength,
+  // λ = lambda[0]); with origin->bounce, the straight light from a point or spot
+  // light at the first diffuse vertex so reached counts by its share against
+  // the bounce connection (bounce_connection.h).
   const ContinuationOrigin* continuation_origin = nullptr;
   int max_segments = 1 << 16;  // hard bound on the loop (interfaces + collisions)
 };

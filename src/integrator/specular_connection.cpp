@@ -501,7 +501,7 @@ bool same_path(const RefractedPath& a, const RefractedPath& b, float tolerance) 
 // Random seeds drawn per other solution S before SMS's count gives up. Delta
 // lights have no other strategy: the cap scales a solution's estimate by
 // 1 − (1 − p)^cap, a bias only where p < 1/cap. Area lights give continuations
-// the rest (connection_owns), exact for any cap that depends on S alone, so a
+// the rest (seeds_miss), exact for any cap that depends on S alone, so a
 // path with a mirror vertex gets a low one: seeds that reflect find many rare
 // solutions (a beaker's curved wall mirrors the lamp from every triangle), and
 // on glass_UVB_5uM_Q0.23 a cap of 1024 for them took 1.3× the CPU time of 64 at
@@ -551,28 +551,28 @@ std::optional<RefractedPath> solve_from_random_seed(const Scene& scene, const Ve
   return solve_from_seed(scene, x, y, to_infinity, lambda_nm, reflect_too, rng);
 }
 
-bool connection_owns(const Scene& scene, const Vec3& x, const Vec3& y, const SpecularChain& walked, float lambda_nm,
-                     Rng& rng, bool seeds) {
-  if (solved_deterministically(scene, x, y, walked, lambda_nm)) return true;
-  if (!seeds || walked.count == 0 || scene.dielectric_shapes.empty()) return false;
-  const float tolerance = kOwnedVertexTolerance * length(y - x);
-  const std::span<const ChainFace> walked_faces(walked.faces.data(), size_t(walked.count));
-  const auto is_walked = [&](const std::optional<RefractedPath>& path) {
-    return path && same_vertices({path->face.data(), size_t(path->count)}, walked_faces, tolerance);
-  };
-  // A seed reaches the walk only through the solver, which must accept it as a
-  // solution: if a solve started on the walk itself does not return it (a
-  // vertex where the normals disagree, a sphere), no seed does (p = 0).
+std::optional<RefractedPath> seed_reachable_solution(const Scene& scene, const Vec3& x, const Vec3& y,
+                                                     const SpecularChain& walked, float lambda_nm) {
+  if (walked.count == 0 || scene.dielectric_shapes.empty()) return std::nullopt;
   SpecularChain own;
   for (int j = 0; j < walked.count; ++j) append_face(scene, walked.faces[j], &own);
-  if (!is_walked(solve_refracted_path(scene, own, x, y, false, lambda_nm))) return false;
-  // SMS's count stops at N = max_seed_trials(S), so the connection holds S with
-  // weight 1 − (1 − p)^N: the walk keeps S exactly when N fresh seeds (the
-  // excitation connection's: reflecting too) all miss it, with probability (1 − p)^N.
-  const int max_trials = max_seed_trials(true, walked_faces);
-  for (int trial = 0; trial < max_trials; ++trial)
-    if (is_walked(solve_from_seed(scene, x, y, false, lambda_nm, true, rng))) return true;
-  return false;
+  auto path = solve_refracted_path(scene, own, x, y, false, lambda_nm);
+  const float tolerance = kOwnedVertexTolerance * length(y - x);
+  if (!path ||
+      !same_vertices({path->face.data(), size_t(path->count)}, {walked.faces.data(), size_t(walked.count)}, tolerance))
+    return std::nullopt;
+  return path;
+}
+
+bool seeds_miss(const Scene& scene, const Vec3& x, const Vec3& y, const RefractedPath& path, float lambda_nm,
+                Rng& rng) {
+  const float tolerance = kOwnedVertexTolerance * length(y - x);
+  const int max_trials = max_seed_trials(true, {path.face.data(), size_t(path.count)});
+  for (int trial = 0; trial < max_trials; ++trial) {
+    const auto found = solve_from_seed(scene, x, y, false, lambda_nm, true, rng);
+    if (found && same_path(*found, path, tolerance)) return false;
+  }
+  return true;
 }
 
 Vec3 connection_start(const Scene& scene, const ShadowOrigin& from, const Vec3& toward) {
@@ -625,18 +625,22 @@ std::optional<ArrivingLight> light_through_dielectrics(const Scene& scene, const
 
   ArrivingLight arriving;
   bool dispersed = false;  // a path crossed dispersive glass: only its hero wavelength is right
-  const auto add = [&](const RefractedPath& path, const SampledSpectrum& L, float count) {
+  const auto add = [&](const RefractedPath& path, const SampledSpectrum& L, float count, bool seeded) {
     if (L.is_black()) return;
     ArrivingLight::Path& p = arriving.paths[arriving.count++];
     p.wi = path.dir[0];
     p.faces = path.count;
     p.L = L * count;
+    p.fresnel = path_fresnel(scene, path, lambda_nm);
+    p.seeded = seeded;
+    if (std::holds_alternative<AreaLight>(light))
+      p.pdf_solid_angle = float(end.pdf_area / (path.geometry * std::fabs(dot(end.n, path.dir[path.count]))));
     for (int j = 0; j < path.count; ++j) dispersed |= is_dispersive(dielectric_of(scene, path.face[j].shape_id));
   };
   const bool area_light = std::holds_alternative<AreaLight>(light);
   const SolvedPaths solved = solve_deterministic_chains(scene, x, end, area_light, seeds.clear_line, lambda_nm);
   for (int i = 0; i < solved.count; ++i)
-    add(solved.paths[i], refracted_path_light(scene, x, medium, light, end, solved.paths[i], media, rng), 1.f);
+    add(solved.paths[i], refracted_path_light(scene, x, medium, light, end, solved.paths[i], media, rng), 1.f, false);
 
   // The other solutions by SMS's unbiased estimate (Zeltner et al. 2020, §4.3),
   // for every light: a point inside a cuvette under a side lamp is also reached
@@ -666,7 +670,7 @@ std::optional<ArrivingLight> light_through_dielectrics(const Scene& scene, const
           const auto again = seed();
           if (again && same_path(*again, *found, tolerance)) break;
         }
-        add(*found, L, float(trials) / std::min(1.f, seeds.probability));
+        add(*found, L, float(trials) / std::min(1.f, seeds.probability), true);
       }
     }
   }
@@ -682,26 +686,6 @@ std::optional<ArrivingLight> light_through_dielectrics(const Scene& scene, const
     }
   }
   return arriving;
-}
-
-std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3& x, int medium, int light_index,
-                                                 Point2 u, PreparedMedia& media, Rng& rng) {
-  // Area lights: the random seed at one connection in four (weight 4). A seed
-  // through a mesh vessel costs a Newton solve that the straight line's planar
-  // film does not; under the beaker's overhead F2 panel (glass_F2_5uM, 96×72,
-  // 12 seeds) every connection took 1.8× the CPU time for no lower error
-  // (fluorescence relMSE × s 0.42× the connection without seeds, one in four
-  // 1.04×), while on default.json (24 seeds) both were alike and on the beaker
-  // under UVB (12 seeds) within 1σ (5.3× against 6.8× over `block`). Delta
-  // lights have no other strategy: every connection.
-  const bool area = std::holds_alternative<AreaLight>(scene.lights[light_index]);
-  const SeedPolicy seeds{area ? 0.25f : 1.f, true};
-  const auto arriving =
-      light_through_dielectrics(scene, ShadowOrigin{x, medium, nullptr}, light_index, u, media, rng, seeds);
-  if (!arriving) return std::nullopt;
-  float fluence = 0.f;
-  for (int i = 0; i < arriving->count; ++i) fluence += arriving->paths[i].L[0];
-  return fluence;
 }
 
 }  // namespace chlorovdb

@@ -26,13 +26,16 @@
 // free surface, or bends in beside the straight line, is found where the
 // straight line crosses other faces.
 //
-// Partition with `full` mode's continuation paths (area lights): a
-// continuation from x that reaches an area light at y through specular glass
-// events only is dropped when one of the deterministic chains (the straight
-// line's, its prefixes, the walls of x's vessel: deterministic_chains) solves
-// to that same path (same shapes, vertices within tolerance), and otherwise
-// with the probability that SMS's capped count holds it (connection_owns).
-// Each specular path x → y is so counted once in expectation; continuations keep the paths no seed converges to (more than
+// Sharing with the other strategies that reach an area light through glass
+// (BSDF-sampled camera paths, `full` mode's excitation continuations): a path
+// the other strategy walks from x to y through specular glass events only is
+// compared with what the deterministic chains (the straight line's, its
+// prefixes, the walls of x's vessel: deterministic_chains) solve from x to y
+// (same shapes, vertices within tolerance: solved_deterministically); the
+// random seeds' share of a path is 1 − (1 − p)^N (seed_reachable_solution,
+// seeds_miss). Camera paths drop what the chains solve; excitation
+// continuations share by the power heuristic (excitation_connection.h).
+// Continuations keep the paths no seed converges to (more than
 // kMaxSpecularChain faces, spheres). Delta lights have no second strategy:
 // those paths are not found (docs/fluorescence.md).
 #include <array>
@@ -162,17 +165,20 @@ bool solved_deterministically(const Scene& scene, const Vec3& x, const Vec3& y, 
 // no glass: the straight line); nullopt when no deterministic chain returns it.
 std::optional<RefractedPath> deterministic_solution(const Scene& scene, const Vec3& x, const Vec3& y,
                                                     const SpecularChain& walked, float lambda_nm);
-// True when the connection owns that path: solved deterministically, or
-// else (with `seeds`: the connection seeds too) with the probability that the
-// connection's random seeds count it (one of kMaxSeedTrials fresh seeds
-// converges to it), so that the continuation's share and the seeds' add up to
-// the path once.
-bool connection_owns(const Scene& scene, const Vec3& x, const Vec3& y, const SpecularChain& walked, float lambda_nm,
-                     Rng& rng, bool seeds);
+// Paths no deterministic chain returns reach the connection through its random
+// seeds only by the solver, which must accept them: the path a solve started on
+// the walk's own faces returns when it is the walk itself (a vertex where the
+// normals disagree, a sphere: nullopt, no seed converges to it, p = 0).
+std::optional<RefractedPath> seed_reachable_solution(const Scene& scene, const Vec3& x, const Vec3& y,
+                                                     const SpecularChain& walked, float lambda_nm);
+// Whether max_seed_trials fresh seeds (reflecting too, as the excitation
+// connection's) all miss `path`: SMS's capped count holds a path with weight
+// 1 − (1 − p)^N, so the other strategy keeps it when this returns true.
+bool seeds_miss(const Scene& scene, const Vec3& x, const Vec3& y, const RefractedPath& path, float lambda_nm, Rng& rng);
 
 // Where a connection from `from` toward the direction `toward` starts: a medium
 // point itself, a surface point offset off its surface to that side (the solves
-// and legs cast plain rays from it; connection_owns' seeds must leave from it too).
+// and legs cast plain rays from it; the other strategy's seeds must leave from it too).
 Vec3 connection_start(const Scene& scene, const ShadowOrigin& from, const Vec3& toward);
 
 // Π F_i of a solved path: Fresnel transmission at each face it crosses,
@@ -223,17 +229,17 @@ struct ArrivingLight {
     Vec3 wi;
     SampledSpectrum L;
     int faces = 0;  // dielectric faces on the way (0: the straight line through no glass)
+    // For weighing against another strategy (excitation_connection.h): Π F_i at
+    // the hero wavelength, whether a random seed found the path, and the light
+    // point's area density per unit solid angle at the point,
+    // pdf_A / (dω_0/dA_⊥ · |cos θ_light|) (area lights; 0 for the others).
+    float fresnel = 1.f;
+    bool seeded = false;
+    float pdf_solid_angle = 0.f;
   };
   std::array<Path, DeterministicChains::kMax + 1> paths;  // the deterministic chains' and a seed's
   int count = 0;
 };
 std::optional<ArrivingLight> light_through_dielectrics(const Scene& scene, const ShadowOrigin& from, int light_index,
-                                                       Point2 u, PreparedMedia& media, Rng& rng,
-                                                       SeedPolicy seeds = {});
-// The fluence rate at a medium point x (one wavelength: wl.count() == 1) that
-// light_through_dielectrics finds: the excitation ray's connection (its random
-// seed at one connection in four for area lights, at every one for delta lights).
-std::optional<float> connect_through_dielectrics(const Scene& scene, const Vec3& x, int medium, int light_index,
-                                                 Point2 u, PreparedMedia& media, Rng& rng);
-
+                                                       Point2 u, PreparedMedia& media, Rng& rng, SeedPolicy seeds = {});
 }  // namespace chlorovdb
