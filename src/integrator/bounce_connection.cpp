@@ -2,7 +2,6 @@
 
 #include <cmath>
 
-#include "integrator/fluorescence_event.h"
 #include "lights/light_emission.h"
 #include "materials/bsdf.h"
 
@@ -39,7 +38,7 @@ StrategyDensities strategy_densities(const Scene& scene, const ContinuationOrigi
              std::fabs(dot(wi, ng)) / d2;
   p.continuation =
       continuation_path_density(scene, origin, path.dir[0], lambda_nm, path_fresnel(scene, path, lambda_nm)) *
-      float(path.geometry * std::fabs(dot(ng, path.dir[path.count]))) * scene.light_sampler.pmf(light_index);
+      float(solid_angle_per_area(path, ng)) * scene.light_sampler.pmf(light_index);
   return p;
 }
 

@@ -77,8 +77,7 @@ float continuation_weight_against_connection(const Scene& scene, const Continuat
   if (seeded) path = seed_reachable_solution(scene, origin.x, y, walked, lambda_nm);
   if (!path) return 1.f;
   const auto& area = std::get<AreaLight>(scene.lights[light_index]);
-  const double solid_angle_per_area = path->geometry * std::fabs(dot(ng, path->dir[path->count]));
-  const float pdf_solid_angle = float(1.0 / (scene.geometry.area(area.shape_id) * solid_angle_per_area));
+  const float pdf_solid_angle = float(1.0 / (scene.geometry.area(area.shape_id) * solid_angle_per_area(*path, ng)));
   const float w = power_heuristic(
       1, connection_path_density(origin, light_index, lambda_nm, pdf_solid_angle, seeded), 1,
       continuation_path_density(scene, origin, path->dir[0], lambda_nm, path_fresnel(scene, *path, lambda_nm)));

@@ -585,6 +585,10 @@ float path_fresnel(const Scene& scene, const RefractedPath& path, float lambda_n
   return F;
 }
 
+double solid_angle_per_area(const RefractedPath& path, const Vec3& n) {
+  return path.geometry * std::fabs(dot(n, path.dir[path.count]));
+}
+
 PathsToSurface paths_to_surface_point(const Scene& scene, const Vec3& x, int medium, const Vec3& z, const Vec3& ng,
                                       PreparedMedia& media, Rng& rng) {
   LightEnd end;
@@ -625,19 +629,20 @@ std::optional<ArrivingLight> light_through_dielectrics(const Scene& scene, const
 
   ArrivingLight arriving;
   bool dispersed = false;  // a path crossed dispersive glass: only its hero wavelength is right
+  const bool area_light = std::holds_alternative<AreaLight>(light);
   const auto add = [&](const RefractedPath& path, const SampledSpectrum& L, float count, bool seeded) {
     if (L.is_black()) return;
     ArrivingLight::Path& p = arriving.paths[arriving.count++];
     p.wi = path.dir[0];
     p.faces = path.count;
     p.L = L * count;
-    p.fresnel = path_fresnel(scene, path, lambda_nm);
     p.seeded = seeded;
-    if (std::holds_alternative<AreaLight>(light))
-      p.pdf_solid_angle = float(end.pdf_area / (path.geometry * std::fabs(dot(end.n, path.dir[path.count]))));
+    if (area_light) {  // what only a strategy sharing area lights' paths reads
+      p.fresnel = path_fresnel(scene, path, lambda_nm);
+      p.pdf_solid_angle = float(end.pdf_area / solid_angle_per_area(path, end.n));
+    }
     for (int j = 0; j < path.count; ++j) dispersed |= is_dispersive(dielectric_of(scene, path.face[j].shape_id));
   };
-  const bool area_light = std::holds_alternative<AreaLight>(light);
   const SolvedPaths solved = solve_deterministic_chains(scene, x, end, area_light, seeds.clear_line, lambda_nm);
   for (int i = 0; i < solved.count; ++i)
     add(solved.paths[i], refracted_path_light(scene, x, medium, light, end, solved.paths[i], media, rng), 1.f, false);

@@ -185,6 +185,9 @@ Vec3 connection_start(const Scene& scene, const ShadowOrigin& from, const Vec3& 
 // reflectance where it mirrors, at the shading normals (also the probability
 // that the path tracer's dielectrics choose those events).
 float path_fresnel(const Scene& scene, const RefractedPath& path, float lambda_nm);
+// dω_0/dA_y of a solved path: the solid angle at its start per unit area of the
+// surface (normal n) at its end point, the generalised geometry term times |cos θ_y|.
+double solid_angle_per_area(const RefractedPath& path, const Vec3& n);
 // The paths the deterministic chains solve from x (a medium point) to the point
 // z of a surface with geometric normal ng, no random seeds (the light a lit floor
 // sends through a vessel's glass; integrator/bounce_connection.h), each with
@@ -229,10 +232,10 @@ struct ArrivingLight {
     Vec3 wi;
     SampledSpectrum L;
     int faces = 0;  // dielectric faces on the way (0: the straight line through no glass)
-    // For weighing against another strategy (excitation_connection.h): Π F_i at
-    // the hero wavelength, whether a random seed found the path, and the light
-    // point's area density per unit solid angle at the point,
-    // pdf_A / (dω_0/dA_⊥ · |cos θ_light|) (area lights; 0 for the others).
+    // For weighing against another strategy (excitation_connection.h): whether
+    // a random seed found the path and, for area lights only, Π F_i at the
+    // hero wavelength and the light point's area density per unit solid angle
+    // at the point, pdf_A / (dω_0/dA_⊥ · |cos θ_light|) (0 for the others).
     float fresnel = 1.f;
     bool seeded = false;
     float pdf_solid_angle = 0.f;
