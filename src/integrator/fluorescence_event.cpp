@@ -150,8 +150,9 @@ float direct_excitation(const Scene& scene, const ContinuationOrigin& origin, fl
 // Same quantity for the fluence that did not come straight from a light:
 // an excitation path at λ'' in a direction from the medium's continuation guide
 // (uniform where it has none).
+// `reemitted_share`: the part of it that came from fluorescence re-emitted on the way.
 float indirect_excitation(const Scene& scene, const ContinuationOrigin& origin, float c, Rng& rng, PathStats& stats,
-                          int depth, float* lambda_excitation) {
+                          int depth, float* lambda_excitation, float* reemitted_share) {
   const FluorescentPigment& fp = *origin.fp;
   const Vec3& x = origin.x;
   const int medium = origin.medium;
@@ -167,7 +168,9 @@ float indirect_excitation(const Scene& scene, const ContinuationOrigin& origin, 
   const Point2 u{rng.uniform(), rng.uniform()};
   const DirectionSample dir =
       guide ? guide->sample(x, u_mix, u) : DirectionSample{sample_uniform_sphere(u), uniform_sphere_pdf()};
-  const float radiance = continuation_radiance(scene, origin, dir.w, lp, rng, stats, depth);
+  float reemitted = 0.f;
+  const float radiance = continuation_radiance(scene, origin, dir.w, lp, rng, stats, depth, &reemitted);
+  *reemitted_share = radiance > 0.f ? reemitted / radiance : 0.f;
   const float fluence = radiance / (dir.pdf * pdf_lambda * origin.p_continue);
   return lp * kAbsorptionPerMolarExtinction * eps * c * fluence;
 }
@@ -211,19 +214,20 @@ float continuation_direction_pdf(const Scene& scene, int medium, const Vec3& x, 
 }
 
 float continuation_radiance(const Scene& scene, const ContinuationOrigin& origin, const Vec3& w, float lambda, Rng& rng,
-                            PathStats& stats, int depth) {
+                            PathStats& stats, int depth, float* reemitted) {
   SampledWavelengths wl = SampledWavelengths::single(lambda);
   PathOptions options;
   options.skip_emitters_on_first_segment = true;
   options.fluorescence_depth = depth + 1;
   options.continuation_origin = &origin;
   const PathRadiance sub = trace_path_from(scene, Ray{origin.x, w}, origin.medium, wl, rng, stats, options);
+  if (reemitted) *reemitted = sub.fluorescence[0];
   return sub.fluorescence[0] + sub.other[0];
 }
 
 SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, float t_end, int medium,
                                             PreparedMedia& media, Rng& rng, PathStats& stats, int depth,
-                                            int* continuations) {
+                                            int* continuations, std::array<float, kExcitationRoutes>* routes) {
   const auto& pigments = scene.fluorescence[medium];
   const SampledWavelengths& lambda = media.lambda();
   const int n = lambda.count();
@@ -282,6 +286,7 @@ SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, 
       if (const ExcitationGrid::Lookup absorbed = grid->at(x); absorbed.values)
         for (int b = 0; b < ExcitationGrid::kBins; ++b)
           add_emission(kAbsorptionPerMolarExtinction * c * absorbed.profile * absorbed.values[b], ExcitationGrid::bin_center(b));
+    if (routes) *routes = {0.f, 0.f, 0.f, 0.f, T[0] * j[0] / (ds.pdf * p_pigment)};
     return T * j / (ds.pdf * p_pigment);
   }
   const bool may_continue = scene.settings.fluorescence == FluorescenceMode::full && depth < kMaxContinuationDepth;
@@ -294,16 +299,25 @@ SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, 
   float lp = 0.f;
   const float direct = direct_excitation(scene, origin, c, rng, stats, &lp);
   add_emission(direct, lp);
+  const float j_connection = j[0];
   if (bounce) {
     const BounceExcitation b = bounce_excitation(scene, origin, c, rng, stats);
     add_emission(b.absorbed, b.lambda);
   }
+  const float j_bounce = j[0] - j_connection;
+  float reemitted_share = 0.f;
   if (may_continue && rng.uniform() < p_continue) {
     ++*continuations;
-    const float indirect = indirect_excitation(scene, origin, c, rng, stats, depth, &lp);
+    const float indirect = indirect_excitation(scene, origin, c, rng, stats, depth, &lp, &reemitted_share);
     add_emission(indirect, lp);
   }
 
+  if (routes) {
+    const float j_continuation = j[0] - j_connection - j_bounce;
+    const float to_lane0 = T[0] / (ds.pdf * p_pigment);
+    *routes = {j_connection * to_lane0, j_bounce * to_lane0, j_continuation * (1.f - reemitted_share) * to_lane0,
+               j_continuation * reemitted_share * to_lane0, 0.f};
+  }
   return T * j / (ds.pdf * p_pigment);
 }
 

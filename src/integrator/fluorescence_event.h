@@ -17,9 +17,11 @@ namespace chlorovdb {
 // render.excitation_sampling = uniform draws λ' uniformly over the same band
 // (the ExcitationSampler knows its mode); render.quantum_yield_mode = roulette
 // keeps the event with probability Q at weight 1 instead of weighting it by Q.
+// `routes`, if given, receives the hero wavelength's estimate split by
+// excitation route (they sum to the result's first lane).
 SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, float t_end, int medium,
                                             PreparedMedia& media, Rng& rng, PathStats& stats, int depth,
-                                            int* continuations);
+                                            int* continuations, std::array<float, kExcitationRoutes>* routes = nullptr);
 
 // Full mode continues an excitation path at an event with probability
 //   P = 0.5^(depth + 1) / (1 + k)^2,
@@ -46,9 +48,10 @@ float continuation_wavelength_pdf(const FluorescentPigment& fp, float lambda);
 // lights by their share against the excitation connection
 // (excitation_connection.h), the light lit diffuse surfaces send by its share
 // against the bounce connection (origin.bounce); nested events at depth + 1.
-// Training the continuation guides probes the same quantity.
+// Training the continuation guides probes the same quantity. `reemitted`, if
+// given, receives the part of it that fluorescence re-emitted on the way.
 float continuation_radiance(const Scene& scene, const ContinuationOrigin& origin, const Vec3& w, float lambda, Rng& rng,
-                            PathStats& stats, int depth);
+                            PathStats& stats, int depth, float* reemitted = nullptr);
 // The solid-angle density of a continuation's direction w from x: the medium's
 // continuation guide's, uniform over the sphere without one.
 float continuation_direction_pdf(const Scene& scene, int medium, const Vec3& x, const Vec3& w);

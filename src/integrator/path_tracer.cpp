@@ -170,9 +170,15 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
           scene.settings.fluorescence != FluorescenceMode::reference) {
         const SampledSpectrum weight = beta / r_u.average(n);
         const float gap = std::max(0.f, dot(ray.o - segment_start, ray.d));
+        const bool camera_path = options.fluorescence_depth == 0;
+        std::array<float, kExcitationRoutes> routes{};
         L.fluorescence += weight * estimate_fluorescence_along(scene, Ray{ray.o - ray.d * gap, ray.d}, t_end + gap,
                                                                medium, media, rng, stats, options.fluorescence_depth,
-                                                               &continuations);
+                                                               &continuations, camera_path ? &routes : nullptr);
+        if (camera_path)
+          for (int r = 0; r < kExcitationRoutes; ++r)
+            if (routes[size_t(r)] != 0.f)
+              stats.excitation_routes.add(ExcitationRoute(r), weight[0] * routes[size_t(r)]);
       }
 
       if (scene.track_by_transmittance(medium)) {

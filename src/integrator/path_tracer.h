@@ -3,6 +3,7 @@
 // spectral MIS, as pbrt-v4's VolPathIntegrator) extended with a fluorescence
 // source term estimated along every ray segment inside a fluorescent medium.
 #include "core/rng.h"
+#include "integrator/excitation_routes.h"
 #include "scene/scene.h"
 
 namespace chlorovdb {
@@ -23,6 +24,7 @@ struct PathStats {
   uint64_t fluorescence_events = 0;  // those where the pigment is present
   uint64_t excitation_rays = 0;
   uint64_t excitation_continuations = 0;
+  ExcitationRouteSums excitation_routes;  // the camera paths' events
 };
 
 struct PathOptions {

@@ -146,6 +146,7 @@ RenderStats render(const Scene& scene, Film& film, const RenderOptions& options)
     result.paths.fluorescence_events += s.fluorescence_events;
     result.paths.excitation_rays += s.excitation_rays;
     result.paths.excitation_continuations += s.excitation_continuations;
+    result.paths.excitation_routes += s.excitation_routes;
   }
   result.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   return result;

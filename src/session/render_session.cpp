@@ -90,7 +90,8 @@ void reduce_over_ranks(const RankGroup& g, const SampleRange& range, int done_he
   }
   // One slot per rank for what is gathered or maximised, then the sums (exact in doubles below 2^53).
   const size_t n = size_t(g.size);
-  std::vector<double> v(3 * n + 5, 0.0);
+  const size_t routes = 3 * n + 5;  // then the excitation routes' sums and sums of squares
+  std::vector<double> v(routes + 2 * kExcitationRoutes, 0.0);
   v[size_t(g.rank)] = done_here;
   v[n + size_t(g.rank)] = o.seconds;
   v[2 * n + size_t(g.rank)] = o.interrupted ? 1 : 0;
@@ -99,6 +100,10 @@ void reduce_over_ranks(const RankGroup& g, const SampleRange& range, int done_he
   v[3 * n + 2] = double(o.paths.fluorescence_events);
   v[3 * n + 3] = double(o.paths.excitation_rays);
   v[3 * n + 4] = double(o.paths.excitation_continuations);
+  for (size_t r = 0; r < kExcitationRoutes; ++r) {
+    v[routes + r] = o.paths.excitation_routes.sum[r];
+    v[routes + kExcitationRoutes + r] = o.paths.excitation_routes.sum_squares[r];
+  }
   g.sum_to_root(v);
   if (g.rank != 0) return;
   o.part.ranges.clear();
@@ -114,7 +119,15 @@ void reduce_over_ranks(const RankGroup& g, const SampleRange& range, int done_he
   }
   o.part.ranges = normalized(o.part.ranges);
   o.nonfinite_samples = uint64_t(v[3 * n]);
-  o.paths = {uint64_t(v[3 * n + 1]), uint64_t(v[3 * n + 2]), uint64_t(v[3 * n + 3]), uint64_t(v[3 * n + 4])};
+  o.paths = PathStats{};
+  o.paths.paths = uint64_t(v[3 * n + 1]);
+  o.paths.fluorescence_events = uint64_t(v[3 * n + 2]);
+  o.paths.excitation_rays = uint64_t(v[3 * n + 3]);
+  o.paths.excitation_continuations = uint64_t(v[3 * n + 4]);
+  for (size_t r = 0; r < kExcitationRoutes; ++r) {
+    o.paths.excitation_routes.sum[r] = v[routes + r];
+    o.paths.excitation_routes.sum_squares[r] = v[routes + kExcitationRoutes + r];
+  }
 }
 
 }  // namespace

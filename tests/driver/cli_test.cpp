@@ -198,6 +198,24 @@ TEST(RenderCli, PhotonRenderReportsItsGridsError) {
   EXPECT_NEAR(fine / coarse, 0.5, 0.05);
 }
 
+// What excited the fluorescence is reported by route, and only where something fluoresces.
+TEST(RenderCli, RenderReportsWhatExcitedTheFluorescence) {
+  const TestDir dir;
+  const std::string scene = (std::filesystem::path(CHLOROVDB_SOURCE_DIR) / "scenes/default.json").string();
+  const auto log_with = [&](const std::string& fluorescence) {
+    const auto r = run({kExe, "render", scene, "-o", (dir / "routes.exr").string(), "--resolution", "16x12", "--spp",
+                        "4", "--threads", "1", "--fluorescence", fluorescence},
+                       dir / "routes.log");
+    EXPECT_EQ(r.status, 0) << r.output;
+    return r.output;
+  };
+  const std::string full = log_with("full");
+  EXPECT_NE(full.find("fluorescence seen, by what excited it"), std::string::npos) << full;
+  EXPECT_NE(full.find("connection to the lights"), std::string::npos) << full;
+  const std::string off = log_with("off");
+  EXPECT_EQ(off.find("fluorescence seen, by what excited it"), std::string::npos) << off;
+}
+
 // The loader's doubts reach the user: the leaf's grid read in millimetres instead of
 // its metres is a thousand times too small, and `render` says so.
 TEST(RenderCli, PrintsTheScenesWarnings) {
