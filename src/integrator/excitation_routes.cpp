@@ -14,8 +14,9 @@ std::string describe_excitation_routes(const ExcitationRouteSums& routes) {
   std::string line;
   for (size_t r = 0; r < kExcitationRoutes; ++r) {
     if (routes.sum_squares[r] == 0) continue;
-    line += fmt::format("{}{} {:.1f} % / {:.1f} %", line.empty() ? "" : ", ", kNames[r], 100 * routes.sum[r] / total,
-                        100 * routes.sum_squares[r] / total_squares);
+    line += fmt::format("{}{} {:.1f} % / {:.1f} % (in {:.2g} % of events)", line.empty() ? "" : ", ", kNames[r],
+                        100 * routes.sum[r] / total, 100 * routes.sum_squares[r] / total_squares,
+                        100 * routes.events[r] / routes.events_any);
   }
   return line;
 }

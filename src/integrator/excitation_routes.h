@@ -15,23 +15,32 @@ enum class ExcitationRoute { connection, bounce, continuation_light, continuatio
 constexpr int kExcitationRoutes = 5;
 
 // Per route, the sum of the events' hero-wavelength contributions to the camera
-// paths' fluorescence (each times its camera path's weight) and of their
-// squares: the routes' shares of the fluorescence layer's mean and of its
-// second moment per event (docs/fluorescence.md, "Where the excitation comes from").
+// paths' fluorescence (each times its camera path's weight), of their squares,
+// and how many events it contributed to: the routes' shares of the fluorescence
+// layer's mean and of its second moment per event, and how often each route
+// finds anything (docs/fluorescence.md, "Where the excitation comes from").
+// Counts are doubles: they are summed over ranks with the sums.
 struct ExcitationRouteSums {
-  std::array<double, kExcitationRoutes> sum{}, sum_squares{};
-  void add(ExcitationRoute route, double value) {
-    sum[size_t(route)] += value;
-    sum_squares[size_t(route)] += value * value;
+  std::array<double, kExcitationRoutes> sum{}, sum_squares{}, events{};
+  double events_any = 0;  // events to which some route contributed
+  // One event's contributions per route (0 where a route brought nothing).
+  void add_event(const std::array<double, kExcitationRoutes>& value) {
+    bool any = false;
+    for (size_t r = 0; r < value.size(); ++r)
+      if (value[r] != 0) sum[r] += value[r], sum_squares[r] += value[r] * value[r], events[r] += 1, any = true;
+    events_any += any ? 1 : 0;
   }
   ExcitationRouteSums& operator+=(const ExcitationRouteSums& o) {
-    for (size_t r = 0; r < sum.size(); ++r) sum[r] += o.sum[r], sum_squares[r] += o.sum_squares[r];
+    for (size_t r = 0; r < sum.size(); ++r)
+      sum[r] += o.sum[r], sum_squares[r] += o.sum_squares[r], events[r] += o.events[r];
+    events_any += o.events_any;
     return *this;
   }
 };
 
 // One line for the render's report: each route's share of the sums' total and
-// of their squares' ("" when no event contributed).
+// of their squares', and the share of the events it contributed to ("" when no
+// event contributed).
 std::string describe_excitation_routes(const ExcitationRouteSums& routes);
 
 }  // namespace chlorovdb

@@ -175,10 +175,11 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
         L.fluorescence += weight * estimate_fluorescence_along(scene, Ray{ray.o - ray.d * gap, ray.d}, t_end + gap,
                                                                medium, media, rng, stats, options.fluorescence_depth,
                                                                &continuations, camera_path ? &routes : nullptr);
-        if (camera_path)
-          for (int r = 0; r < kExcitationRoutes; ++r)
-            if (routes[size_t(r)] != 0.f)
-              stats.excitation_routes.add(ExcitationRoute(r), weight[0] * routes[size_t(r)]);
+        if (camera_path) {
+          std::array<double, kExcitationRoutes> weighted;
+          for (size_t r = 0; r < weighted.size(); ++r) weighted[r] = double(weight[0]) * routes[r];
+          stats.excitation_routes.add_event(weighted);
+        }
       }
 
       if (scene.track_by_transmittance(medium)) {

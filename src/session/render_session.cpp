@@ -90,8 +90,8 @@ void reduce_over_ranks(const RankGroup& g, const SampleRange& range, int done_he
   }
   // One slot per rank for what is gathered or maximised, then the sums (exact in doubles below 2^53).
   const size_t n = size_t(g.size);
-  const size_t routes = 3 * n + 5;  // then the excitation routes' sums and sums of squares
-  std::vector<double> v(routes + 2 * kExcitationRoutes, 0.0);
+  const size_t routes = 3 * n + 5;  // then the excitation routes' sums, sums of squares and counts
+  std::vector<double> v(routes + 3 * kExcitationRoutes + 1, 0.0);
   v[size_t(g.rank)] = done_here;
   v[n + size_t(g.rank)] = o.seconds;
   v[2 * n + size_t(g.rank)] = o.interrupted ? 1 : 0;
@@ -103,7 +103,9 @@ void reduce_over_ranks(const RankGroup& g, const SampleRange& range, int done_he
   for (size_t r = 0; r < kExcitationRoutes; ++r) {
     v[routes + r] = o.paths.excitation_routes.sum[r];
     v[routes + kExcitationRoutes + r] = o.paths.excitation_routes.sum_squares[r];
+    v[routes + 2 * kExcitationRoutes + r] = o.paths.excitation_routes.events[r];
   }
+  v[routes + 3 * kExcitationRoutes] = o.paths.excitation_routes.events_any;
   g.sum_to_root(v);
   if (g.rank != 0) return;
   o.part.ranges.clear();
@@ -127,7 +129,9 @@ void reduce_over_ranks(const RankGroup& g, const SampleRange& range, int done_he
   for (size_t r = 0; r < kExcitationRoutes; ++r) {
     o.paths.excitation_routes.sum[r] = v[routes + r];
     o.paths.excitation_routes.sum_squares[r] = v[routes + kExcitationRoutes + r];
+    o.paths.excitation_routes.events[r] = v[routes + 2 * kExcitationRoutes + r];
   }
+  o.paths.excitation_routes.events_any = v[routes + 3 * kExcitationRoutes];
 }
 
 }  // namespace

@@ -75,7 +75,13 @@ TEST(ExcitationRoutes, FullModeSplitsTheSameSumByRoute) {
   EXPECT_GT(route_sum(t, ExcitationRoute::continuation_reemitted), 0.0);  // the dye's own red, reabsorbed
   EXPECT_EQ(route_sum(t, ExcitationRoute::bounce), 0.0);                  // a distant light has no bounce connection
   EXPECT_EQ(route_sum(t, ExcitationRoute::photons), 0.0);
-  for (size_t r = 0; r < kExcitationRoutes; ++r) EXPECT_GE(t.routes.sum_squares[r], 0.0);
+  for (size_t r = 0; r < kExcitationRoutes; ++r) {
+    EXPECT_GE(t.routes.sum_squares[r], 0.0);
+    EXPECT_LE(t.routes.events[r], t.routes.events_any);
+  }
+  // Every event connects; one in two continues.
+  EXPECT_LT(t.routes.events[size_t(ExcitationRoute::continuation_light)],
+            t.routes.events[size_t(ExcitationRoute::connection)]);
 }
 
 TEST(ExcitationRoutes, PhotonsAreOneRoute) {
@@ -92,10 +98,12 @@ TEST(ExcitationRoutes, PhotonsAreOneRoute) {
 
 TEST(ExcitationRoutes, ReportGivesEachRoutesShareOfTheMeanAndOfTheSecondMoment) {
   ExcitationRouteSums r;
-  r.add(ExcitationRoute::connection, 1.0);
-  r.add(ExcitationRoute::connection, 1.0);
-  r.add(ExcitationRoute::continuation_light, 2.0);
+  r.add_event({1.0, 0, 0, 0, 0});
+  r.add_event({1.0, 0, 0, 0, 0});
+  r.add_event({0, 0, 2.0, 0, 0});
+  r.add_event({0, 0, 0, 0, 0});  // nothing found: not an event of any route
   EXPECT_EQ(describe_excitation_routes(r),
-            "connection to the lights 50.0 % / 33.3 %, continuations' light 50.0 % / 66.7 %");
+            "connection to the lights 50.0 % / 33.3 % (in 67 % of events), "
+            "continuations' light 50.0 % / 66.7 % (in 33 % of events)");
   EXPECT_EQ(describe_excitation_routes(ExcitationRouteSums{}), "");
 }
