@@ -463,10 +463,27 @@ PYBIND11_MODULE(chlorovdb, m) {
       .def_readonly("seconds", &RenderResult::seconds)
       .def_readonly("nonfinite_samples", &RenderResult::nonfinite_samples)
       .def_readonly("metadata", &RenderResult::metadata)
-      .def_property_readonly("paths", [](const RenderResult& r) { return r.paths.paths; },
-                             "paths traced: camera paths plus excitation continuations")
+      .def_property_readonly(
+          "paths", [](const RenderResult& r) { return r.paths.paths; },
+          "paths traced: camera paths plus excitation continuations")
       .def_property_readonly("fluorescence_events", [](const RenderResult& r) { return r.paths.fluorescence_events; })
       .def_property_readonly("excitation_rays", [](const RenderResult& r) { return r.paths.excitation_rays; })
+      .def_property_readonly(
+          "excitation_routes",
+          [](const RenderResult& r) {
+            static constexpr const char* kKeys[kExcitationRoutes] = {"connection", "bounce", "continuation_light",
+                                                                     "continuation_reemitted", "photons"};
+            const ExcitationRouteSums& e = r.paths.excitation_routes;
+            py::dict routes;
+            for (size_t k = 0; k < kExcitationRoutes; ++k)
+              routes[kKeys[k]] = py::dict(py::arg("sum") = e.sum[k], py::arg("sum_squares") = e.sum_squares[k],
+                                          py::arg("events") = uint64_t(e.events[k]));
+            routes["events"] = uint64_t(e.events_any);
+            return routes;
+          },
+          "what excited the fluorescence the camera saw, per route (connection, bounce, continuation_light, "
+          "continuation_reemitted, photons): sums over the camera paths' events of their hero-wavelength "
+          "contributions, of their squares, and the events each route contributed to; 'events': those any did")
       .def("__getitem__", [](const RenderResult& r, const std::string& layer) -> py::object {
         if (layer == "S0" || layer == "spectral") return r.spectral;
         if (!r.layers.contains(layer)) throw py::key_error(layer);

@@ -248,6 +248,12 @@ class ChlorovdbTest(unittest.TestCase):
         self.assertEqual(result.samples_per_pixel, 4)
         self.assertEqual(result.nonfinite_samples, 0)
         self.assertGreaterEqual(result.paths, 6 * 8 * 4)  # camera paths plus excitation continuations
+        routes = result.excitation_routes
+        self.assertGreater(routes["connection"]["sum"], 0.0)
+        self.assertGreater(routes["events"], 0)
+        for name in ("connection", "bounce", "continuation_light", "continuation_reemitted", "photons"):
+            self.assertLessEqual(routes[name]["events"], routes["events"], name)
+            self.assertGreaterEqual(routes[name]["sum_squares"], 0.0, name)
         self.assertIsNone(result.spectral)
         self.assertEqual(result.metadata["nonfinite_samples"], 0)
 
