@@ -316,6 +316,9 @@ Image session_image(const Scene& scene, const RenderJob& job, const RenderOutcom
   m.set("nonfinite_samples", double(o.nonfinite_samples));  // including sessions before a resume
   if (o.resumed_at > 0) m.set("resumed_at_spp", o.resumed_at);
   if (o.ranks > 1) m.set("mpi_ranks", o.ranks);
+  // What excited the fluorescence, over this session's samples (after a resume, the resumed part's).
+  if (const std::string routes = describe_excitation_routes(o.paths.excitation_routes); !routes.empty())
+    m.set("excitation_routes", routes);
   set_part_metadata(m, o.part);
   return image;
 }

@@ -209,11 +209,19 @@ TEST(RenderCli, RenderReportsWhatExcitedTheFluorescence) {
     EXPECT_EQ(r.status, 0) << r.output;
     return r.output;
   };
+  const auto routes_metadata = [&] {
+    const Image img = read_exr(dir / "routes.exr");
+    const MetadataValue* v = img.metadata.find("excitation_routes");
+    return v && std::holds_alternative<std::string>(*v) ? std::get<std::string>(*v) : std::string();
+  };
   const std::string full = log_with("full");
   EXPECT_NE(full.find("fluorescence seen, by what excited it"), std::string::npos) << full;
   EXPECT_NE(full.find("connection to the lights"), std::string::npos) << full;
+  EXPECT_NE(full.find(routes_metadata()), std::string::npos) << "the image's metadata holds the same line";
+  EXPECT_NE(routes_metadata().find("connection to the lights"), std::string::npos);
   const std::string off = log_with("off");
   EXPECT_EQ(off.find("fluorescence seen, by what excited it"), std::string::npos) << off;
+  EXPECT_EQ(routes_metadata(), "");
 }
 
 // The loader's doubts reach the user: the leaf's grid read in millimetres instead of
