@@ -72,7 +72,7 @@ want() {
 [ -f meshes/beaker_glass.obj ] || /usr/bin/python3 tools/make_meshes.py
 [ -f volumes/spill_1uM.vdb ] && [ -f volumes/leaf_chl.vdb ] || tools/make_volumes.sh "$bin"
 mkdir -p docs/gallery out/gallery
-times=out/gallery/times.tsv   # scene, spp, resolution, wall s, cpu s, load average; kept between runs
+times=out/gallery/times.tsv   # scene, spp, resolution, wall s, cpu s, load average, mode, routes; kept between runs
 touch "$times"
 # A full run renders every scene at this commit: no times survive from an older one.
 [ ${#only[@]} -eq 0 ] && [ "$md_only" = 0 ] && : > "$times"
@@ -98,9 +98,11 @@ while IFS='|' read -r name fig caption; do
   res=$(echo "$meta" | sed -n 's/^ *chlorovdb:full_resolution: *"\(.*\)"/\1/p' | head -1)
   mode=$(grep -o 'fluorescence: [a-z]*' "out/gallery/$name.log" | head -1 | cut -d' ' -f2 || true)
   nonfinite=$(echo "$meta" | sed -n 's/^ *chlorovdb:nonfinite_samples: *//p' | head -1)
+  routes=$(echo "$meta" | sed -n 's/^ *chlorovdb:excitation_routes: *"\(.*\)"/\1/p' | head -1)
   [ "${nonfinite:-0}" = "0" ] || echo "$name: ${nonfinite} non-finite samples" >&2
   grep -v "^$name	" "$times" > "$times.new" || true
-  printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$name" "${spp:-?}" "${res:-?}" "$wall" "$cpu" "$load" "${mode:-none}" >> "$times.new"
+  printf '%s\t%s\t%s\t%s\t%s\t%s\t%s\t%s\n' "$name" "${spp:-?}" "${res:-?}" "$wall" "$cpu" "$load" "${mode:-none}" \
+    "$routes" >> "$times.new"
   mv "$times.new" "$times"
   echo "$name: ${spp:-?} spp, ${res:-?}, ${wall} s wall, ${cpu} s CPU (load ${load})"
 done <<< "$scenes"
@@ -128,7 +130,7 @@ done <<< "$scenes"
     [ -n "$name" ] || continue
     row=$(grep "^$name	" "$times" || true)
     [ -n "$row" ] || continue
-    IFS=$'\t' read -r _ spp res wall cpu load mode <<< "$row"
+    IFS=$'\t' read -r _ spp res wall cpu load mode routes <<< "$row"
     echo "## $name — $fig"
     echo
     echo "![$name](gallery/$name.png)"
@@ -141,6 +143,11 @@ done <<< "$scenes"
     echo
     echo "$spp spp, ${res/x/ × } px, fluorescence \`$mode\`: **$wall s** wall (load $load), $cpu s CPU."
     echo
+    if [ -n "$routes" ]; then
+      echo "What excited the fluorescence (share of the mean / of the second moment; docs/fluorescence.md, \"Where the"
+      echo "excitation comes from\"): $routes."
+      echo
+    fi
   done <<< "$scenes"
 } > docs/gallery.md
 echo "wrote docs/gallery.md"
