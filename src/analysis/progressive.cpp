@@ -43,6 +43,7 @@ std::vector<ConvergencePoint> run_convergence(const Scene& scene, const Image& r
   std::vector<ConvergencePoint> points;
   int done = 0;
   double seconds = 0, cpu_seconds = 0;
+  ExcitationRouteSums routes;
   auto elapsed = [&] { return o.clock == Clock::wall ? seconds : cpu_seconds; };
   size_t next_spp = 0, next_budget = 0;
   auto measure = [&](double budget) {
@@ -51,6 +52,7 @@ std::vector<ConvergencePoint> run_convergence(const Scene& scene, const Image& r
     p.seconds = seconds;
     p.cpu_seconds = cpu_seconds;
     p.time_budget = budget;
+    p.excitation_routes = routes;
     Image image = film.to_image(done);
     p.errors = image_errors(image, reference);
     if (o.keep_images) p.image = std::move(image);
@@ -79,6 +81,7 @@ std::vector<ConvergencePoint> run_convergence(const Scene& scene, const Image& r
     cpu_seconds += process_cpu_seconds() - cpu0;
     done += stats.samples_done;
     seconds += stats.seconds;
+    routes += stats.paths.excitation_routes;
     if (stats.interrupted) break;
     while (next_spp < spp.size() && spp[next_spp] <= done) {
       measure(0.0);

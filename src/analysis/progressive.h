@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "analysis/image_error.h"
+#include "integrator/excitation_routes.h"
 #include "io/image.h"
 #include "scene/scene.h"
 
@@ -26,6 +27,7 @@ struct ConvergencePoint {
   double time_budget = 0;    // the budget this point answers (0: a sample-count point), in options.clock
   double time(Clock c) const { return c == Clock::wall ? seconds : cpu_seconds; }
   std::vector<LayerError> errors;
+  ExcitationRouteSums excitation_routes;  // what excited the fluorescence, over the samples so far
   Image image;               // the estimate at this point
 };
 

@@ -149,6 +149,9 @@ int converge(const ConvergeArgs& a) {
     return run_convergence(scene, reference, co);
   }();
 
+  if (!points.empty())
+    if (const std::string routes = describe_excitation_routes(points.back().excitation_routes); !routes.empty())
+      fmt::print(stderr, "fluorescence seen, by what excited it (at {} spp): {}\n", points.back().spp, routes);
   // Warnings at the largest effort, where the reference's share of the error is largest.
   if (!points.empty())
     for (const LayerError& e : points.back().errors)

@@ -44,6 +44,9 @@ Outcome converge(SlabCase slab, const std::string& tag) {
     // Only fluorescence reaches the camera.
     EXPECT_EQ(find_error(p.errors, "nonfluorescence")->mse, 0.0) << tag;
   }
+  // The excitation routes accumulate over the progressive render's chunks.
+  EXPECT_GT(points.back().excitation_routes.events_any, points.front().excitation_routes.events_any) << tag;
+  EXPECT_GT(points.back().excitation_routes.sum[size_t(ExcitationRoute::connection)], 0.0) << tag;
   Outcome out;
   out.slope = fit_power_law(n, rmse).exponent;
   const ImageLayer& x = points.back().image.layers[0];
