@@ -54,12 +54,17 @@ LayerError layer_error(const ImageLayer& x, const ImageLayer& r, const ImageLaye
     e.reference_rel_variance = rel_var / double(n);
   }
   if (const size_t nc = r.channels.size(); n && nc && se > 0) {
-    std::vector<double> per_pixel(n / nc, 0.0), per_pixel_rel(n / nc, 0.0);
+    std::vector<double> per_pixel(n / nc, 0.0), per_pixel_rel(n / nc, 0.0), magnitude(n / nc, 0.0);
     for (size_t i = 0; i < n; ++i) {
       const double d = double(x.pixels[i]) - double(r.pixels[i]);
       per_pixel[i / nc] += d * d;
       per_pixel_rel[i / nc] += d * d / (double(r.pixels[i]) * r.pixels[i] + eps);
+      magnitude[i / nc] += std::abs(double(r.pixels[i])) / double(nc);
     }
+    double dim = 0;
+    for (size_t p = 0; p < per_pixel_rel.size(); ++p)
+      if (magnitude[p] < kDimPixelFraction * std::abs(e.reference_mean)) dim += per_pixel_rel[p];
+    e.dim_pixel_share_rel = rel > 0 ? dim / rel : 0.0;
     e.top_pixel_share = top_share(per_pixel, se);
     e.top_pixel_share_rel = top_share(per_pixel_rel, rel);
   }

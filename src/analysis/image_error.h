@@ -23,6 +23,12 @@
 //              (x - r)^2 / (r^2 + eps) held by the worst kTopPixelFraction of pixels (ranked
 //              by that sum over their channels). A bright reference firefly dominates MSE but
 //              not relMSE; a firefly of the estimate where the reference is dark dominates both.
+//   dim_pixel_share_rel = the fraction of relMSE held by the pixels whose reference (the mean
+//              of |r| over their channels) is below kDimPixelFraction of the layer's mean: where
+//              eps, not r^2, sets the weight, and relMSE weighs an error up to 1 / kRelativeEpsilon
+//              times more than in the image's bright parts. A fluorescent liquid's silhouette
+//              and the set its glow lights are such pixels: their few, rare samples of the
+//              liquid can hold most of the layer's relMSE while the liquid itself converges.
 // Standard-error layers themselves are not compared.
 #include <string>
 #include <vector>
@@ -34,6 +40,7 @@ namespace chlorovdb {
 // Regularises relMSE where the reference is dark (relative to the layer's mean squared).
 inline constexpr double kRelativeEpsilon = 1e-2;
 inline constexpr double kTopPixelFraction = 1e-3;
+inline constexpr double kDimPixelFraction = 0.1;
 
 // Thresholds of the warnings `converge` and `reference` print (error_warnings).
 inline constexpr double kReferenceDominatesShare = 0.1;  // reference_variance > this share of the MSE
@@ -46,6 +53,7 @@ struct LayerError {
   double bias_clamped = 0, reference_mean_clamped = 0;
   double reference_variance = 0, reference_rel_variance = 0;
   double top_pixel_share = 0, top_pixel_share_rel = 0;
+  double dim_pixel_share_rel = 0;
 };
 
 // The estimate's own error: the measured one minus the reference's own term. With

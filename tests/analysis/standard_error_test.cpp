@@ -108,3 +108,27 @@ TEST(ImageError, ReportsTheReferencesOwnErrorAndDominantPixels) {
   EXPECT_EQ(self.rms_stderr, 0.0);
   EXPECT_FALSE(reference_self_error(ref, "fluorescence").available);
 }
+
+// A liquid of bright pixels beside a dark set where the estimate's rare samples
+// leave the same absolute error: relMSE weighs the dark pixels by 1 / eps, so
+// they hold nearly all of it, and dim_pixel_share_rel says so.
+TEST(ImageError, ReportsTheShareOfRelMseInDimPixels) {
+  Image ref, est;
+  ref.width = est.width = 100;
+  ref.height = est.height = 1;
+  ref.layers = {{"fluorescence", {"R"}, std::vector<float>(100, 0.f)}};
+  for (size_t i = 0; i < 20; ++i) ref.layers[0].pixels[i] = 5.f;      // the liquid
+  for (size_t i = 20; i < 100; ++i) ref.layers[0].pixels[i] = 0.01f;  // the set, under 10 % of the mean (1.008)
+  est = ref;
+  for (size_t i = 0; i < 100; ++i) est.layers[0].pixels[i] += (i % 2 ? 0.05f : -0.05f);
+  const auto errors = image_errors(est, ref);
+  ASSERT_EQ(errors.size(), 1u);
+  const double mean = (20 * 5.0 + 80 * 0.01) / 100, eps = kRelativeEpsilon * mean * mean;
+  const double bright = 20 * 0.0025 / (25 + eps), dim = 80 * 0.0025 / (1e-4 + eps);
+  EXPECT_NEAR(errors[0].dim_pixel_share_rel, dim / (dim + bright), 1e-4);
+  EXPECT_GT(errors[0].dim_pixel_share_rel, 0.99);
+  // Errors in the liquid alone: no share in the dim pixels.
+  est = ref;
+  est.layers[0].pixels[3] += 1.f;
+  EXPECT_EQ(image_errors(est, ref)[0].dim_pixel_share_rel, 0.0);
+}

@@ -95,6 +95,7 @@ std::vector<Row> read_rows(const std::vector<std::string>& files, const std::str
       e.reference_rel_variance = number("reference_rel_variance");
       e.top_pixel_share = number("top_pixel_share");
       e.top_pixel_share_rel = number("top_pixel_share_rel");
+      if (col.count("dim_pixel_share_rel")) e.dim_pixel_share_rel = number("dim_pixel_share_rel");
       rows.push_back(r);
     }
   }
@@ -235,7 +236,7 @@ int reference_check(const std::vector<std::string>& files, const std::vector<std
 int slope(const std::vector<std::string>& files, const std::string& layer, const std::string& baseline, int tail_octaves) {
   struct Label {
     std::vector<PowerFit> corrected, raw, tail;
-    std::vector<double> rel_mse, seconds, top_share, bias;
+    std::vector<double> rel_mse, seconds, top_share, dim_share, bias;
     int spp = 0;
   };
   std::vector<std::string> order;
@@ -260,26 +261,31 @@ int slope(const std::vector<std::string>& files, const std::string& layer, const
     l.rel_mse.push_back(rows.back().error.rel_mse);
     l.seconds.push_back(rows.back().seconds);
     l.top_share.push_back(rows.back().error.top_pixel_share);
+    l.dim_share.push_back(rows.back().error.dim_pixel_share_rel);
     l.bias.push_back(rows.back().relative_bias());
   }
   auto mean = [](const std::vector<double>& v) { return mean_over_runs(v).mean; };
   auto standard_error = [](const std::vector<double>& v) { return mean_over_runs(v).standard_error; };
   auto product = [&](const Label& l) { return mean(l.rel_mse) * mean(l.seconds); };
   const double base = by_label.count(baseline) ? product(by_label[baseline]) : 0.0;
-  fmt::print("| variant | seeds | relMSE slope (ref. share removed) | raw | RMSE slope | RMSE slope, last {} octaves | spp | relMSE | CPU s "
-             "| relMSE × s | vs {} | worst 0.1 % px share (mean / max) | mean bias |\n",
-             tail_octaves, baseline);
-  fmt::print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
+  fmt::print(
+      "| variant | seeds | relMSE slope (ref. share removed) | raw | RMSE slope | RMSE slope, last {} octaves | spp | "
+      "relMSE | CPU s "
+      "| relMSE × s | vs {} | worst 0.1 % px share (mean / max) | relMSE share of dim px | mean bias |\n",
+      tail_octaves, baseline);
+  fmt::print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
   for (const std::string& label : order) {
     const Label& l = by_label[label];
     const MeanOverRuns c = mean_exponent(l.corrected), r = mean_exponent(l.raw), t = mean_exponent(l.tail);
-    fmt::print("| {} | {} | {:.3f} ± {:.3f} | {:.3f} ± {:.3f} | {:.3f} ± {:.3f} | {:.3f} ± {:.3f} | {} | {:.3e} ± {:.1e} | {:.2f} | {:.3e} | {} "
-               "| {:.1f} / {:.1f} % | {:+.1f} ± {:.1f} % |\n",
-               label, c.runs, c.mean, c.standard_error, r.mean, r.standard_error, c.mean / 2, c.standard_error / 2, t.mean / 2,
-               t.standard_error / 2, l.spp,
-               mean(l.rel_mse), standard_error(l.rel_mse), mean(l.seconds), product(l),
-               base > 0 && product(l) > 0 ? fmt::format("{:.2f}×", base / product(l)) : "–", 100 * mean(l.top_share),
-               100 * *std::max_element(l.top_share.begin(), l.top_share.end()), 100 * mean(l.bias), 100 * standard_error(l.bias));
+    fmt::print(
+        "| {} | {} | {:.3f} ± {:.3f} | {:.3f} ± {:.3f} | {:.3f} ± {:.3f} | {:.3f} ± {:.3f} | {} | {:.3e} ± {:.1e} | "
+        "{:.2f} | {:.3e} | {} "
+        "| {:.1f} / {:.1f} % | {:.0f} % | {:+.1f} ± {:.1f} % |\n",
+        label, c.runs, c.mean, c.standard_error, r.mean, r.standard_error, c.mean / 2, c.standard_error / 2, t.mean / 2,
+        t.standard_error / 2, l.spp, mean(l.rel_mse), standard_error(l.rel_mse), mean(l.seconds), product(l),
+        base > 0 && product(l) > 0 ? fmt::format("{:.2f}×", base / product(l)) : "–", 100 * mean(l.top_share),
+        100 * *std::max_element(l.top_share.begin(), l.top_share.end()), 100 * mean(l.dim_share), 100 * mean(l.bias),
+        100 * standard_error(l.bias));
   }
   return 0;
 }
