@@ -26,8 +26,8 @@
 //   dim_pixel_share_rel = the fraction of relMSE held by the pixels whose reference (the mean
 //              of |r| over their channels) is below kDimPixelFraction of the layer's mean: where
 //              eps, not r^2, sets the weight, and relMSE weighs an error up to 1 / kRelativeEpsilon
-//              times more than in the image's bright parts. A fluorescent liquid's silhouette
-//              and the set its glow lights are such pixels: their few, rare samples of the
+//              times more than in the image's bright parts. The dark set a fluorescent liquid's
+//              glow lights through its glass is such a place: its few, rare samples of the
 //              liquid can hold most of the layer's relMSE while the liquid itself converges.
 // Standard-error layers themselves are not compared.
 #include <string>
