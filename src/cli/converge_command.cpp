@@ -162,15 +162,14 @@ int converge(const ConvergeArgs& a) {
   {
     std::ofstream f(csv);
     f << "label,spp,wall_seconds,cpu_seconds,clock,time_budget,layer,mse,rmse,rel_mse,bias,reference_mean,"
-         "bias_clamped,reference_mean_clamped,efficiency,efficiency_rel,reference_variance,reference_rel_variance,top_"
-         "pixel_share,top_pixel_share_rel,"
-         "dim_pixel_share_rel\n";
+         "bias_clamped,reference_mean_clamped,efficiency,efficiency_rel,reference_variance,reference_rel_variance,"
+         "top_pixel_share,top_pixel_share_rel,dim_pixel_share_rel\n";
     for (const ConvergencePoint& p : points)
       for (const LayerError& e : p.errors) {
         const double t = p.time(co.clock);
         f << fmt::format(
-            "{},{},{:.6f},{:.6f},{},{:g},{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:."
-            "6e},{:.6e},{:.6e},{:.6e}\n",
+            "{},{},{:.6f},{:.6f},{},{:g},{},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},"
+            "{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e},{:.6e}\n",
             label, p.spp, p.seconds, p.cpu_seconds, a.clock, p.time_budget, e.layer, e.mse, e.rmse, e.rel_mse, e.bias,
             e.reference_mean, e.bias_clamped, e.reference_mean_clamped, e.mse > 0 && t > 0 ? 1.0 / (e.mse * t) : 0.0,
             e.rel_mse > 0 && t > 0 ? 1.0 / (e.rel_mse * t) : 0.0, e.reference_variance, e.reference_rel_variance,

@@ -269,9 +269,9 @@ int slope(const std::vector<std::string>& files, const std::string& layer, const
   auto product = [&](const Label& l) { return mean(l.rel_mse) * mean(l.seconds); };
   const double base = by_label.count(baseline) ? product(by_label[baseline]) : 0.0;
   fmt::print(
-      "| variant | seeds | relMSE slope (ref. share removed) | raw | RMSE slope | RMSE slope, last {} octaves | spp | "
-      "relMSE | CPU s "
-      "| relMSE × s | vs {} | worst 0.1 % px share (mean / max) | relMSE share of dim px | mean bias |\n",
+      "| variant | seeds | relMSE slope (ref. share removed) | raw | RMSE slope | RMSE slope, last {} octaves "
+      "| spp | relMSE | CPU s | relMSE × s | vs {} | worst 0.1 % px share (mean / max) "
+      "| relMSE share of dim px | mean bias |\n",
       tail_octaves, baseline);
   fmt::print("| --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |\n");
   for (const std::string& label : order) {
