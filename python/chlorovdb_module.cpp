@@ -471,13 +471,12 @@ PYBIND11_MODULE(chlorovdb, m) {
       .def_property_readonly(
           "excitation_routes",
           [](const RenderResult& r) {
-            static constexpr const char* kKeys[kExcitationRoutes] = {"connection", "bounce", "continuation_light",
-                                                                     "continuation_reemitted", "photons"};
             const ExcitationRouteSums& e = r.paths.excitation_routes;
             py::dict routes;
             for (size_t k = 0; k < kExcitationRoutes; ++k)
-              routes[kKeys[k]] = py::dict(py::arg("sum") = e.sum[k], py::arg("sum_squares") = e.sum_squares[k],
-                                          py::arg("events") = uint64_t(e.events[k]));
+              routes[kExcitationRouteKeys[k]] =
+                  py::dict(py::arg("sum") = e.sum[k], py::arg("sum_squares") = e.sum_squares[k],
+                           py::arg("events") = uint64_t(e.events[k]));
             routes["events"] = uint64_t(e.events_any);
             return routes;
           },

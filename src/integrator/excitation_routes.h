@@ -13,6 +13,9 @@ namespace chlorovdb {
 // excitation_estimate = photons, the photons' grid alone.
 enum class ExcitationRoute { connection, bounce, continuation_light, continuation_reemitted, photons };
 constexpr int kExcitationRoutes = 5;
+// Each route's identifier, in ExcitationRoute's order (the Python results' keys).
+inline constexpr std::array<const char*, kExcitationRoutes> kExcitationRouteKeys = {
+    "connection", "bounce", "continuation_light", "continuation_reemitted", "photons"};
 
 // Per route, the sum of the events' hero-wavelength contributions to the camera
 // paths' fluorescence (each times its camera path's weight), of their squares,
