@@ -25,9 +25,9 @@ struct FluorescentPigment {
   std::vector<int> lights;                     // lights that can excite it
   std::vector<ExcitationSampler> excitation;   // parallel to `lights`
   LightSampler light_sampler;                  // over `lights`, weighted by excitation power
-  // Some of `lights` is a point or spot light: the floor it lights can send its
-  // light in (integrator/bounce_connection.h).
-  bool lights_at_a_point = false;
+  // Some of `lights` is a point, spot or area light: the floor it lights can send
+  // its light in (integrator/bounce_connection.h).
+  bool lights_light_surfaces = false;
   // ∝ emission_k·ε·λ'' per emitting pigment k (the light reabsorbed here is
   // fluorescence): the continuation's λ'' mixture draws from these so
   // re-emitted light is found where the emission and absorption bands overlap.

@@ -18,27 +18,37 @@ namespace {
 constexpr float kBounceProbability = 0.5f;
 
 // Both strategies' densities for one path x → (glass) → z ← l at λ, per unit
-// area at z and per nm (the header's formulas).
+// area at z (and at y for area lights) and per nm (the header's formulas).
 struct StrategyDensities {
   float bounce = 0.f, continuation = 0.f;
 };
 StrategyDensities strategy_densities(const Scene& scene, const ContinuationOrigin& origin, int light_index,
-                                     float lambda_nm, const Vec3& z, const Vec3& ng, const RefractedPath& path) {
+                                     float lambda_nm, const Vec3& z, const Vec3& ng, const RefractedPath& path,
+                                     const LightVertex& y) {
   const FluorescentPigment& fp = *origin.fp;
   const Light& light = scene.lights[light_index];
   const int slot = fp.slot_of_light(light_index);
+  const auto* area = std::get_if<AreaLight>(&light);
   const auto position = light_position(light);
   StrategyDensities p;
-  if (slot < 0 || !position) return p;
-  const Vec3 to_light = *position - z;
+  if (slot < 0 || (!area && !position)) return p;
+  const Vec3 to_light = (area ? y.p : *position) - z;
   const float d2 = dot(to_light, to_light);
   const Vec3 wi = to_light / std::sqrt(d2);
-  p.bounce = kBounceProbability * fp.light_sampler.pmf(light_index) *
-             excitation_pdf(fp.excitation[size_t(slot)], lambda_nm) * emission_direction_pdf(light, -wi) *
-             std::fabs(dot(wi, ng)) / d2;
-  p.continuation =
+  const float bounce_choice =
+      kBounceProbability * fp.light_sampler.pmf(light_index) * excitation_pdf(fp.excitation[size_t(slot)], lambda_nm);
+  const float z_per_area = std::fabs(dot(wi, ng)) / d2;  // dω at the light per unit area at z
+  const float continuation_to_z =
       continuation_path_density(scene, origin, path.dir[0], lambda_nm, path_fresnel(scene, path, lambda_nm)) *
-      float(solid_angle_per_area(path, ng)) * scene.light_sampler.pmf(light_index);
+      float(solid_angle_per_area(path, ng));
+  if (area) {
+    p.bounce = bounce_choice * emission_area_direction_pdf(*area, y.n, -wi, scene.geometry) * z_per_area;
+    p.continuation = continuation_to_z * (scene.light_sampler.pmf(light_index) / scene.geometry.area(area->shape_id) +
+                                          y.bsdf_pdf * std::fabs(dot(wi, y.n)) / d2);
+  } else {
+    p.bounce = bounce_choice * emission_direction_pdf(light, -wi) * z_per_area;
+    p.continuation = continuation_to_z * scene.light_sampler.pmf(light_index);
+  }
   return p;
 }
 
@@ -56,11 +66,14 @@ BounceExcitation bounce_excitation(const Scene& scene, const ContinuationOrigin&
   float pdf_lambda;
   const float lp = sample_excitation(es, rng.uniform(), &pdf_lambda);
   out.lambda = lp;
+  const bool area = std::holds_alternative<AreaLight>(light);
+  const Point2 u_position = area ? Point2{rng.uniform(), rng.uniform()} : Point2{};
   const Point2 u_dir{rng.uniform(), rng.uniform()};
   const auto position = light_position(light);
-  if (!position || !(pdf_lambda > 0.f)) return out;
-  const auto emitted = sample_emission(light, Point2{}, u_dir, lp, scene.geometry);
+  if ((!area && !position) || !(pdf_lambda > 0.f)) return out;
+  const auto emitted = sample_emission(light, u_position, u_dir, lp, scene.geometry);
   if (!emitted) return out;
+  const Vec3 y = area ? emitted->ray.o : *position;  // where z's shadow ray ends: off an area light's surface
 
   // The first surface the emitted ray meets (media boundaries pass).
   Ray ray = emitted->ray;
@@ -82,7 +95,7 @@ BounceExcitation bounce_excitation(const Scene& scene, const ContinuationOrigin&
   const int medium_lit = dot(wi, hit->ng) > 0.f ? binding.medium_outside : binding.medium_inside;
   // The light's leg as the shadow ray from z sees it (its media's transmittance).
   const SampledSpectrum T_light = connect_to_light(scene, ShadowOrigin{hit->p, medium_lit, &*hit},
-                                                   LightTarget{wi, *position, false}, media, rng, ConnectionOptions{})
+                                                   LightTarget{wi, y, false}, media, rng, ConnectionOptions{})
                                       .T;
   const float cos_ng = std::fabs(dot(wi, hit->ng));
   if (T_light[0] == 0.f || cos_ng == 0.f) return out;
@@ -96,7 +109,8 @@ BounceExcitation bounce_excitation(const Scene& scene, const ContinuationOrigin&
     const Vec3 wo = -p.path.dir[p.path.count];  // from z toward x's chain
     const float f = bsdf.f(wo, wi)[0];
     if (f == 0.f) continue;
-    const StrategyDensities d = strategy_densities(scene, origin, pick->index, lp, hit->p, hit->ng, p.path);
+    const StrategyDensities d = strategy_densities(scene, origin, pick->index, lp, hit->p, hit->ng, p.path,
+                                                   LightVertex{emitted->p, emitted->n, bsdf.pdf(wo, wi)});
     if (!(d.bounce > 0.f)) continue;  // rounding put z's direction outside the cone it was drawn in
     fluence += d.bounce / (d.bounce + d.continuation) * arriving * f * p.transport[0];
   }
@@ -107,11 +121,13 @@ BounceExcitation bounce_excitation(const Scene& scene, const ContinuationOrigin&
 
 float continuation_weight_against_bounce(const Scene& scene, const ContinuationOrigin& origin,
                                          const SpecularChain& walked, const SurfaceHit& z, int light_index,
-                                         float lambda_nm) {
-  if (origin.fp->slot_of_light(light_index) < 0 || !light_position(scene.lights[light_index])) return 1.f;
+                                         float lambda_nm, const LightVertex& y) {
+  const Light& light = scene.lights[light_index];
+  if (origin.fp->slot_of_light(light_index) < 0 || !(light_position(light) || std::holds_alternative<AreaLight>(light)))
+    return 1.f;
   const auto path = deterministic_solution(scene, origin.x, z.p, walked, lambda_nm);
   if (!path) return 1.f;
-  const StrategyDensities d = strategy_densities(scene, origin, light_index, lambda_nm, z.p, z.ng, *path);
+  const StrategyDensities d = strategy_densities(scene, origin, light_index, lambda_nm, z.p, z.ng, *path, y);
   return d.bounce > 0.f ? d.continuation / (d.bounce + d.continuation) : 1.f;
 }
 

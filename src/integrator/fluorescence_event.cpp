@@ -293,7 +293,7 @@ SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, 
   const float p_continue = may_continue ? continuation_probability(depth, *continuations) : 0.f;
   // Light a lit diffuse surface sends in through the glass, sampled from the
   // lamp's side too (bounce_connection.h), where the continuation reaches it.
-  const bool bounce = may_continue && scene.settings.excitation_bounce && fp.lights_at_a_point &&
+  const bool bounce = may_continue && scene.settings.excitation_bounce && fp.lights_light_surfaces &&
                       scene.settings.excitation_through_glass == ExcitationThroughGlass::connect;
   const ContinuationOrigin origin{x, medium, &fp, p_continue, bounce};
   float lp = 0.f;

@@ -45,9 +45,9 @@ constexpr SeedPolicy kCameraSeeds{0.25f, false};
 // 3.4× the relMSE × time; without, 15 %, and default.json's total layer gained 1.25×
 // (docs/fluorescence.md). The straight line's path without glass is the shadow ray's.
 constexpr SeedPolicy kCameraAreaSeeds{0.f, false, false};
-// `clear_line_weight(light_index)`: the share a point or spot light's straight
-// path through no glass keeps (an excitation continuation weighs it against the
-// bounce connection, bounce_connection.h; 1 elsewhere).
+// `clear_line_weight(light_index, p_light, n_light, wi)`: the share a light's
+// straight path through no glass keeps (an excitation continuation weighs it
+// against the bounce connection, bounce_connection.h; 1 elsewhere).
 template <typename ScatterFn, typename ClearLineWeight>
 SampledSpectrum sample_direct_light(const Scene& scene, const ScatterVertex& v, const SampledSpectrum& r_p,
                                     PreparedMedia& media, Rng& rng, bool through_glass, bool area_through_glass,
@@ -62,7 +62,8 @@ SampledSpectrum sample_direct_light(const Scene& scene, const ScatterVertex& v, 
     if (const auto arriving = light_through_dielectrics(scene, v.origin, pick->index, Point2{}, media, rng, kCameraSeeds))
       for (int i = 0; i < arriving->count; ++i) {
         const ArrivingLight::Path& p = arriving->paths[i];
-        const float w = p.faces == 0 ? clear_line_weight(pick->index) : 1.f;
+        const float w =
+            p.faces == 0 ? clear_line_weight(pick->index, light_position(light).value_or(Vec3{}), Vec3{}, p.wi) : 1.f;
         sum += scatter(p.wi).first * p.L * w;
       }
     return sum / (pick->pmf * r_p.average(lambda.count()));
@@ -86,10 +87,11 @@ SampledSpectrum sample_direct_light(const Scene& scene, const ScatterVertex& v, 
   LightConnection c =
       connect_to_light(scene, v.origin, LightTarget{ls->wi, ls->p_light, ls->is_infinite}, media, rng, options);
   if (c.blocked) return through;
-  if (ls->is_delta) return f * c.T * ls->L * clear_line_weight(pick->index) / (light_pdf * r_p.average(lambda.count()));
+  const float share = clear_line_weight(pick->index, ls->p_light, ls->n_light, ls->wi);
+  if (ls->is_delta) return f * c.T * ls->L * share / (light_pdf * r_p.average(lambda.count()));
   c.r_l *= r_p * light_pdf;
   c.r_u *= r_p * scatter_pdf;
-  return through + f * c.T * ls->L / (c.r_l + c.r_u).average(lambda.count());
+  return through + f * c.T * ls->L * share / (c.r_l + c.r_u).average(lambda.count());
 }
 
 }  // namespace
@@ -133,6 +135,15 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
       options.continuation_origin && scene.settings.excitation_through_glass == ExcitationThroughGlass::connect;
   bool walked_only_glass = shares_with_excitation_connection;
   bool walk_from_excitation_origin = shares_with_excitation_connection;
+  // A continuation's first diffuse vertex z, reached from its event through glass
+  // alone, while its BSDF sample travels on: a hit on an area light there is the
+  // bounce connection's path too (bounce_connection.h).
+  struct BounceVertex {
+    SpecularChain walked;  // the glass events from the event to z
+    SurfaceHit z;
+    float bsdf_pdf = 0.f;  // z's density for the sampled direction
+  };
+  std::optional<BounceVertex> bounce_vertex;
   const auto start_walk = [&](const ShadowOrigin& at) {
     walk_from = at;
     if (at.hit) {
@@ -142,6 +153,7 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
     walked.count = 0;
     walked_only_glass = area_through_glass;
     walk_from_excitation_origin = false;
+    bounce_vertex.reset();
   };
   ++stats.paths;
 
@@ -232,7 +244,7 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
                                       [&](const Vec3& wi) {
                                         return std::pair{phase_eval(mp.phase, wo, wi), phase_pdf(mp.phase, wo, wi)};
                                       },
-                                      [](int) { return 1.f; });
+                                      [](int, const Vec3&, const Vec3&, const Vec3&) { return 1.f; });
                 const MediumPhaseSample ps = phase_sample(mp.phase, wo, Point2{rng.uniform(), rng.uniform()});
                 if (!(ps.pdf > 0.f)) {
                   terminated = true;
@@ -302,6 +314,10 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
                solved_deterministically(scene, connection_start(scene, walk_from, hit->p - walk_from.p), hit->p, walked,
                                         lambda[0]))
         share = 0.f;
+      else if (bounce_vertex)
+        share = continuation_weight_against_bounce(scene, *options.continuation_origin, bounce_vertex->walked,
+                                                   bounce_vertex->z, binding.area_light, lambda[0],
+                                                   LightVertex{hit->p, hit->ng, bounce_vertex->bsdf_pdf});
       if (share > 0.f)
         add_emitted(Le_area(std::get<AreaLight>(scene.lights[binding.area_light]), hit->ng, -ray.d, lambda) * share,
                     binding.area_light, &*hit);
@@ -315,33 +331,37 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
       continue;
     }
     if (depth++ >= scene.settings.max_depth) break;
+    bounce_vertex.reset();
 
     const Vec3 wo = -ray.d;
     const Bsdf bsdf = make_bsdf(scene.materials[binding.material], *hit, lambda);
     prev_hit = *hit;
     const int medium_here = dot(wo, hit->ng) > 0.f ? binding.medium_outside : binding.medium_inside;
     const ScatterVertex v{{hit->p, medium_here, &prev_hit}, hit->ns};
+    // A continuation's first diffuse vertex, reached from its event through glass
+    // alone: the bounce connection samples the same paths from the light.
+    const bool weigh_against_bounce =
+        !bsdf.is_specular() && walk_from_excitation_origin && options.continuation_origin->bounce && walked_only_glass;
     if (!bsdf.is_specular()) {
-      // A continuation's first diffuse vertex, reached from its event through
-      // glass alone: the bounce connection samples the same paths from the light.
-      const bool weigh_against_bounce =
-          walk_from_excitation_origin && options.continuation_origin->bounce && walked_only_glass;
       L.other += beta * sample_direct_light(
                             scene, v, r_u, media, rng, direct_through_glass, area_through_glass,
                             [&](const Vec3& wi) {
                               return std::pair{bsdf.f(wo, wi) * std::fabs(dot(wi, hit->ns)), bsdf.pdf(wo, wi)};
                             },
-                            [&](int light_index) {
+                            [&](int light_index, const Vec3& p_light, const Vec3& n_light, const Vec3& wi) {
                               return weigh_against_bounce
-                                         ? continuation_weight_against_bounce(scene, *options.continuation_origin,
-                                                                              walked, *hit, light_index, lambda[0])
+                                         ? continuation_weight_against_bounce(
+                                               scene, *options.continuation_origin, walked, *hit, light_index,
+                                               lambda[0], LightVertex{p_light, n_light, bsdf.pdf(wo, wi)})
                                          : 1.f;
                             });
     }
     const auto bs = bsdf.sample(wo, rng.uniform(), Point2{rng.uniform(), rng.uniform()});
     if (!bs || bs->pdf == 0.f) break;
     if (!bsdf.is_specular()) {
+      const SpecularChain to_z = walked;
       start_walk(v.origin);
+      if (weigh_against_bounce) bounce_vertex = BounceVertex{to_z, *hit, bs->pdf};
     } else if (walked_only_glass) {
       const bool glass = bs->is_specular && std::holds_alternative<Dielectric>(scene.materials[binding.material]);
       if (glass && walked.count < kMaxSpecularChain)

@@ -37,9 +37,10 @@ struct PathOptions {
   // excitation_through_glass = connect, the paths it walks from there through
   // glass alone to an area light count by their share against the excitation
   // connection (integrator/excitation_connection.h; paths are single-wavelength,
-  // λ = lambda[0]); with origin->bounce, the straight light from a point or spot
-  // light at the first diffuse vertex so reached counts by its share against
-  // the bounce connection (bounce_connection.h).
+  // λ = lambda[0]); with origin->bounce, the straight light from a point, spot
+  // or area light at the first diffuse vertex so reached (its shadow ray, or its
+  // BSDF sample's hit on an area light) counts by its share against the bounce
+  // connection (bounce_connection.h).
   const ContinuationOrigin* continuation_origin = nullptr;
   int max_segments = 1 << 16;  // hard bound on the loop (interfaces + collisions)
 };

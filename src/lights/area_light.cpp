@@ -21,7 +21,7 @@ std::optional<LightLiSample> sample_Li(const AreaLight& light, const LightSample
   const SampledSpectrum Le = Le_area(light, ss.n, -wi, lambda);
   if (Le.is_black()) return std::nullopt;
   // dA = r² / |cos θ_light| dω.
-  return LightLiSample{Le, wi, ss.pdf_area * r2 / cos_light, ss.p, false, false};
+  return LightLiSample{Le, wi, ss.pdf_area * r2 / cos_light, ss.p, false, false, ss.n};
 }
 
 float pdf_Li(const AreaLight& light, const LightSampleContext& ctx, Vec3 wi, const GeometryScene& scene,

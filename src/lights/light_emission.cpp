@@ -89,6 +89,13 @@ float own_direction_pdf(const SpotLight& light, const Vec3& w) {
   return dot(w, light.direction) >= light.cos_falloff_end ? uniform_cone_pdf(light.cos_falloff_end) : 0.f;
 }
 
+// Cosine-weighted about the normal n at the emitting point (each side with probability ½ if two-sided).
+float own_direction_pdf(const AreaLight& light, const Vec3& n, const Vec3& w) {
+  const float cos_n = dot(w, n);
+  if (!light.two_sided && !(cos_n > 0.f)) return 0.f;
+  return (light.two_sided ? 0.5f : 1.f) * std::fabs(cos_n) * kInvPi;
+}
+
 std::optional<LightEmission> emit(const PointLight& light, Point2, Point2 u_dir, float lambda, const GeometryScene&,
                                   const EmissionTarget* target, float u_aim) {
   const auto dir = mixed_direction(
@@ -97,7 +104,7 @@ std::optional<LightEmission> emit(const PointLight& light, Point2, Point2 u_dir,
   if (!dir) return std::nullopt;
   const float flux = light.I(lambda) * light.scale / dir->pdf;
   if (!(flux > 0.f)) return std::nullopt;
-  return LightEmission{Ray{light.position, dir->w}, flux};
+  return LightEmission{Ray{light.position, dir->w}, flux, light.position, Vec3{}};
 }
 
 std::optional<LightEmission> emit(const SpotLight& light, Point2, Point2 u_dir, float lambda, const GeometryScene&,
@@ -110,13 +117,12 @@ std::optional<LightEmission> emit(const SpotLight& light, Point2, Point2 u_dir, 
   if (!dir || !(dir->pdf > 0.f)) return std::nullopt;
   const float flux = light.I(lambda) * light.scale * spot_falloff(light, dir->w) / dir->pdf;
   if (!(flux > 0.f)) return std::nullopt;
-  return LightEmission{Ray{light.position, dir->w}, flux};
+  return LightEmission{Ray{light.position, dir->w}, flux, light.position, Vec3{}};
 }
 
 std::optional<LightEmission> emit(const AreaLight& light, Point2 u_pos, Point2 u_dir, float lambda,
                                   const GeometryScene& scene, const EmissionTarget* target, float u_aim) {
   const ShapeSample ss = scene.sample_area(light.shape_id, u_pos);
-  const float side_pdf = light.two_sided ? 0.5f : 1.f;
   const auto dir = mixed_direction(
       target, ss.p, u_dir, u_aim,
       [&](Point2 u) -> std::optional<Vec3> {
@@ -133,10 +139,7 @@ std::optional<LightEmission> emit(const AreaLight& light, Point2 u_pos, Point2 u
         if (!(local.z > 0.f)) return std::nullopt;
         return Frame::from_z(n).to_world(local);
       },
-      [&](const Vec3& w) {
-        const float cos_n = dot(w, ss.n);
-        return light.two_sided || cos_n > 0.f ? side_pdf * std::fabs(cos_n) * kInvPi : 0.f;
-      });
+      [&](const Vec3& w) { return own_direction_pdf(light, ss.n, w); });
   if (!dir || !(dir->pdf > 0.f)) return std::nullopt;
   const float cos_n = dot(dir->w, ss.n);
   if (!light.two_sided && !(cos_n > 0.f)) return std::nullopt;  // an aimed ray behind a one-sided emitter
@@ -150,7 +153,7 @@ std::optional<LightEmission> emit(const AreaLight& light, Point2 u_pos, Point2 u
   on_light.ng = on_light.ns = ss.n;
   on_light.shape_id = light.shape_id;
   on_light.p_error = 32.f * std::numeric_limits<float>::epsilon() * max_component(abs(ss.p));
-  return LightEmission{scene.spawn_ray(on_light, dir->w), flux};
+  return LightEmission{scene.spawn_ray(on_light, dir->w), flux, ss.p, ss.n};
 }
 
 std::optional<LightEmission> emit(const DistantLight& light, Point2 u_pos, Point2, float lambda,
@@ -159,7 +162,7 @@ std::optional<LightEmission> emit(const DistantLight& light, Point2 u_pos, Point
   if (!(beam.density > 0.f)) return std::nullopt;
   const float flux = light.L(lambda) * light.scale / beam.density;
   if (!(flux > 0.f)) return std::nullopt;
-  return LightEmission{beam.ray, flux};
+  return LightEmission{beam.ray, flux, Vec3{}, Vec3{}};
 }
 
 std::optional<LightEmission> emit(const EnvironmentLight& light, Point2 u_pos, Point2 u_dir, float lambda,
@@ -169,7 +172,7 @@ std::optional<LightEmission> emit(const EnvironmentLight& light, Point2 u_pos, P
   if (!(beam.density > 0.f)) return std::nullopt;
   const float flux = light.L(lambda) * light.scale / (beam.density * uniform_sphere_pdf());
   if (!(flux > 0.f)) return std::nullopt;
-  return LightEmission{beam.ray, flux};
+  return LightEmission{beam.ray, flux, Vec3{}, Vec3{}};
 }
 
 }  // namespace
@@ -179,6 +182,10 @@ std::optional<LightEmission> sample_emission(const Light& light, Point2 u_positi
                                              const EmissionTarget* target, float u_aim) {
   return std::visit(
       [&](const auto& l) { return emit(l, u_position, u_direction, lambda_nm, scene, target, u_aim); }, light);
+}
+
+float emission_area_direction_pdf(const AreaLight& light, const Vec3& n, const Vec3& w, const GeometryScene& scene) {
+  return own_direction_pdf(light, n, w) / scene.area(light.shape_id);
 }
 
 float emission_direction_pdf(const Light& light, const Vec3& w) {

@@ -11,6 +11,8 @@ namespace chlorovdb {
 struct LightEmission {
   Ray ray;     // leaving the light (from outside the scene's bounding sphere for lights at infinity)
   float flux;  // emitted spectral power at λ divided by the ray's density: W/nm per sample
+  Vec3 p,
+      n;  // the point it leaves (area lights: ray.o is offset off the surface) and the area light's geometric normal
 };
 
 // A sphere a share of the emitted rays aims at (the medium the photons are traced
@@ -40,5 +42,8 @@ std::optional<LightEmission> sample_emission(const Light& light, Point2 u_positi
 // lights at a point (point: uniform sphere; spot: uniform in the outer cone);
 // 0 for any other light.
 float emission_direction_pdf(const Light& light, const Vec3& w);
+// An area light's: the density of sample_emission's ray (without a target) leaving
+// the point of geometric normal n in direction w, per unit area and solid angle.
+float emission_area_direction_pdf(const AreaLight& light, const Vec3& n, const Vec3& w, const GeometryScene& scene);
 
 }  // namespace chlorovdb

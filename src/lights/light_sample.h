@@ -19,6 +19,7 @@ struct LightLiSample {
   Vec3 p_light;       // point to trace the shadow ray to (outside the scene for infinite lights)
   bool is_delta;      // no MIS with BSDF sampling possible
   bool is_infinite;   // at infinity: test occlusion to the scene's edge, not to p_light exactly
+  Vec3 n_light{};     // area lights: the geometric normal at p_light
 };
 
 }  // namespace chlorovdb

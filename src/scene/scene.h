@@ -90,7 +90,7 @@ struct RenderSettings {
   ExcitationThroughGlass excitation_through_glass = ExcitationThroughGlass::connect;
   DirectLightThroughGlass direct_light_through_glass = DirectLightThroughGlass::connect;
   // `full` mode with `connect`: excitation by light that lit diffuse surfaces
-  // reflect from point and spot lights, also sampled from the light's side
+  // reflect from point, spot and area lights, also sampled from the light's side
   // (integrator/bounce_connection.h). Off only to measure it.
   bool excitation_bounce = true;
   ContinuationDirections continuation_directions = ContinuationDirections::uniform;

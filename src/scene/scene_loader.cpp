@@ -427,7 +427,7 @@ void setup_fluorescence(Scene& scene, const std::string& mode) {
         fp.lights.push_back(int(l));
         fp.excitation.push_back(std::move(es));
         weights.push_back(w);
-        fp.lights_at_a_point |= light_position(light).has_value();
+        fp.lights_light_surfaces |= light_position(light).has_value() || std::holds_alternative<AreaLight>(light);
       }
       if (!fp.lights.empty()) fp.light_sampler = LightSampler(fp.lights, relative_weights(weights));
     }

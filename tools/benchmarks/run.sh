@@ -87,9 +87,9 @@ variants_for() {  # $1 scene file
       # Photons with camera connections to area lights through glass: the pair that
       # gives both layers the Monte Carlo rate on the glass scenes (docs/fluorescence.md).
       echo "excitation_estimate=photons+direct=all|--set render.excitation_estimate=photons --set render.direct_light_through_glass=all"
-      # The bounce connection (light a point or spot lamp sends off lit surfaces
-      # into the glass) off, to measure what it buys.
-      if grep -Eq '"type"[[:space:]]*:[[:space:]]*"(point|spot)"' "$1"; then
+      # The bounce connection (light a point, spot or area lamp sends off lit
+      # surfaces into the glass) off, to measure what it buys.
+      if grep -Eq '"type"[[:space:]]*:[[:space:]]*"(point|spot)"|"emission"[[:space:]]*:[[:space:]]*\{' "$1"; then
         echo "excitation_bounce=false|--set render.excitation_bounce=false"
       fi
     fi
@@ -296,7 +296,7 @@ its time) and, in scenes with glass, the excitation rays stopped at glass
 (\`excitation_through_glass=fresnel\`, an approximation) instead of solving for the refracted
 paths; in scenes with glass, camera paths connected through it to area lights too
 (\`direct_light_through_glass=all\`, by the straight line's solve) and that with photons
-(\`excitation_estimate=photons+direct=all\`); where glass meets point or spot lamps, the bounce
+(\`excitation_estimate=photons+direct=all\`); where glass meets point, spot or area lamps, the bounce
 connection off (\`excitation_bounce=false\`: the light the lamps send off lit surfaces into the
 glass left to continuations alone); wavelengths per
 path (\`--wavelengths\`); the camera's wavelengths drawn from the eye's density alone instead of the
