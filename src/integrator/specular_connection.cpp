@@ -46,7 +46,7 @@ void append_face(const Scene& scene, const ChainFace& f, SpecularChain* c) {
 // Appends the hit's face to the chain; false when the surface is opaque (not a
 // dielectric) or the chain is full.
 bool append_dielectric_face(const Scene& scene, const SurfaceHit& hit, SpecularChain* c) {
-  if (!scene.is_dielectric(scene.shapes[hit.shape_id]) || c->count == kMaxSpecularChain) return false;
+  if (!scene.is_dielectric(scene.shapes[hit.shape_id]) || c->count == kMaxRefractedChain) return false;
   append_face(scene, ChainFace{hit.shape_id, hit.prim_id, hit.ng, dot(hit.ng, hit.p), hit.p}, c);
   return true;
 }
@@ -223,33 +223,142 @@ int wall_chains(const Scene& scene, const Vec3& x, const Vec3& toward, int vesse
   return count;
 }
 
-}  // namespace
+// Chains mirrored in an outer face of x's vessel: along each world axis, away
+// from the light, the flat faces of the vessel up to its outer face; the light's
+// mirror image y' in that face's plane; the faces the line from x toward y'
+// crosses up to that face, which reflects it, and the faces the reflected line
+// then crosses toward y. Light a cuvette's floor mirrors by total internal
+// reflection reaches the liquid near the floor this way. Kept only where the
+// line toward y' would be totally reflected (n_x · sin θ > 1 at the face, n_x the
+// index at x relative to the light's side): the partial reflections, a few per
+// cent, are the continuations'.
+int mirror_chains(const Scene& scene, const Vec3& x, const Vec3& y, int vessel, double n_x,
+                  std::span<SpecularChain, 3> mirrors) {
+  int count = 0;
+  const Vec3 toward = y - x;
+  const double distance = length(toward);
+  for (int axis = 0; axis < 3; ++axis) {
+    if (toward[axis] == 0.f) continue;
+    // The line toward the image is steepest to the face when the face passes
+    // through x (then it is the line toward y): no face across the axis farther
+    // away can reflect it totally.
+    const double cos_line = toward[axis] / distance;
+    if (!(n_x * n_x * (1.0 - cos_line * cos_line) > 1.0)) continue;
+    Vec3 d(0.f);
+    d[axis] = toward[axis] > 0.f ? -1.f : 1.f;
+    // The outer face: the last of the (at most two) flat dielectric faces the walk along d crosses.
+    int mirror_shape = -1;
+    Vec3 n;
+    float plane = 0.f;
+    Ray ray{x, d};
+    for (int crossings = 0, faces = 0; crossings < 256; ++crossings) {
+      const auto hit = scene.geometry.intersect(ray, kInfinity);
+      if (!hit) break;
+      const ShapeBinding& b = scene.shapes[hit->shape_id];
+      if (!is_pass_through(scene, b)) {
+        if (!scene.is_dielectric(b) || !scene.geometry.flat_face(hit->shape_id, hit->prim_id) || ++faces > 2) break;
+        mirror_shape = hit->shape_id;
+        n = normalize(hit->ng);
+        plane = dot(n, hit->p);
+      }
+      ray = scene.geometry.spawn_ray(*hit, d);
+    }
+    if (mirror_shape < 0) continue;
+    const Vec3 image = y - n * (2.f * (dot(n, y) - plane));
+    const double cos_face = dot(normalize(image - x), n);
+    if (!(n_x * n_x * (1.0 - cos_face * cos_face) > 1.0)) continue;
+    // Walk from x toward the image until the mirror's face, then reflected toward y.
+    SpecularChain c;
+    ray = Ray{x, normalize(image - x)};
+    bool mirrored = false, ok = true;
+    for (int crossings = 0; crossings < 256 && ok; ++crossings) {
+      const auto hit = scene.geometry.intersect(ray, kInfinity);
+      if (mirrored) {  // past the faces before y (a light on a surface passes too, as in specular_seed_chain)
+        const float t_y = dot(y - ray.o, ray.d);
+        if (!hit || (t_y > 0.f && t_y * (1.f - kStopShort) < hit->t)) break;
+      }
+      if (!hit) {
+        ok = false;
+        break;
+      }
+      const ShapeBinding& b = scene.shapes[hit->shape_id];
+      if (is_pass_through(scene, b)) {
+        ray = scene.geometry.spawn_ray(*hit, ray.d);
+        continue;
+      }
+      if (!scene.is_dielectric(b) || c.count == kMaxSpecularChain) {
+        ok = false;
+        break;
+      }
+      const bool reflect = !mirrored && hit->shape_id == mirror_shape &&
+                           std::fabs(dot(normalize(hit->ng), n)) > kParallelCos &&
+                           std::fabs(dot(n, hit->p) - plane) <= 1e-4f * length(toward);
+      append_face(scene, ChainFace{hit->shape_id, hit->prim_id, hit->ng, dot(hit->ng, hit->p), hit->p, reflect}, &c);
+      Vec3 dir = ray.d;
+      if (reflect) {
+        mirrored = true;
+        dir = dir - n * (2.f * dot(dir, n));
+      }
+      ray = scene.geometry.spawn_ray(*hit, dir);
+    }
+    if (ok && mirrored && c.faces[0].shape_id == vessel) mirrors[size_t(count++)] = c;
+  }
+  return count;
+}
 
-DeterministicChains deterministic_chains(const Scene& scene, const Vec3& x, const Vec3& y, bool to_infinity,
-                                         bool area_light, float lambda_nm) {
+// deterministic_chains, or only its chains with a mirror vertex (`mirrored`) or
+// only those without: a walk matches only chains of its own kind.
+enum class ChainKinds { all, unmirrored, mirrored };
+DeterministicChains chains_of_kind(const Scene& scene, const Vec3& x, const Vec3& y, bool to_infinity, bool area_light,
+                                   float lambda_nm, ChainKinds kinds) {
   DeterministicChains out;
   const auto chain = straight_line_chain(scene, x, y, to_infinity);
   if (!chain) return out;
-  out.chains[size_t(out.count++)] = *chain;
+  if (kinds != ChainKinds::mirrored) out.chains[size_t(out.count++)] = *chain;
   if (chain->count == 0) return out;
+  // A vessel whose first face is curved (a beaker's, a teapot's smooth-shaded
+  // mesh) has no walls: the axes' walks would find none (one run each read 14 %
+  // and 17 % more CPU time with them on glass_UVB_5uM_Q0.23 and the teapot).
+  const int vessel = chain->faces[0].shape_id;
+  const bool flat = scene.geometry.flat_face(vessel, chain->faces[0].prim_id);
+  const auto add_mirrors = [&] {
+    if (to_infinity || !flat) return;
+    std::array<SpecularChain, 3> mirrors;
+    // x's index relative to the light's side (chain_indices are relative to x's).
+    const double n_x = 1.0 / chain_indices(scene, *chain, x, lambda_nm)[size_t(chain->count)];
+    const int m = mirror_chains(scene, x, y, vessel, n_x, mirrors);
+    for (int i = 0; i < m; ++i) out.chains[size_t(out.count++)] = mirrors[size_t(i)];
+  };
+  if (kinds == ChainKinds::mirrored) {
+    add_mirrors();
+    return out;
+  }
   if (area_light && chain->count > 1) {
     const unsigned prefixes = exit_prefixes(scene, *chain, x, lambda_nm);
     for (int j = 1; j < chain->count; ++j)
       if (prefixes >> j & 1u) out.chains[size_t(out.count++)] = chain_prefix(scene, *chain, j);
   }
-  // A vessel whose first face is curved (a beaker's, a teapot's smooth-shaded
-  // mesh) has no walls: the axes' walks would find none (one run each read 14 %
-  // and 17 % more CPU time with them on glass_UVB_5uM_Q0.23 and the teapot).
-  if (!scene.geometry.flat_face(chain->faces[0].shape_id, chain->faces[0].prim_id)) return out;
+  if (!flat) return out;
   std::array<SpecularChain, 3> walls;
-  const int n = wall_chains(scene, x, to_infinity ? y : y - x, chain->faces[0].shape_id, walls);
+  const int n = wall_chains(scene, x, to_infinity ? y : y - x, vessel, walls);
   for (int i = 0; i < n; ++i) out.chains[size_t(out.count++)] = walls[size_t(i)];
+  if (kinds == ChainKinds::all) add_mirrors();
   return out;
+}
+
+}  // namespace
+
+DeterministicChains deterministic_chains(const Scene& scene, const Vec3& x, const Vec3& y, bool to_infinity,
+                                         bool area_light, float lambda_nm) {
+  return chains_of_kind(scene, x, y, to_infinity, area_light, lambda_nm, ChainKinds::all);
 }
 
 std::optional<RefractedPath> deterministic_solution(const Scene& scene, const Vec3& x, const Vec3& y,
                                                     const SpecularChain& walked, float lambda_nm) {
-  const DeterministicChains candidates = deterministic_chains(scene, x, y, false, true, lambda_nm);
+  bool mirrored = false;
+  for (int j = 0; j < walked.count; ++j) mirrored |= walked.faces[size_t(j)].reflect;
+  const DeterministicChains candidates =
+      chains_of_kind(scene, x, y, false, true, lambda_nm, mirrored ? ChainKinds::mirrored : ChainKinds::unmirrored);
   const float tolerance = kOwnedVertexTolerance * length(y - x);
   for (int i = 0; i < candidates.count; ++i) {
     const SpecularChain& c = candidates.chains[size_t(i)];
@@ -347,7 +456,7 @@ std::optional<SpecularChain> specular_seed_chain(const Scene& scene, const Vec3&
       ray = scene.geometry.spawn_ray(*hit, ray.d);
       continue;
     }
-    if (!scene.is_dielectric(b) || c.count == kMaxSpecularChain) return std::nullopt;
+    if (!scene.is_dielectric(b) || c.count == kMaxRefractedChain) return std::nullopt;
     // As the glass scatters: reflected with probability R (1 under total internal reflection).
     const Vec3 wo = -ray.d;
     const float eta = ior_at(dielectric_of(scene, hit->shape_id), lambda_nm);
@@ -553,7 +662,7 @@ std::optional<RefractedPath> solve_from_random_seed(const Scene& scene, const Ve
 
 std::optional<RefractedPath> seed_reachable_solution(const Scene& scene, const Vec3& x, const Vec3& y,
                                                      const SpecularChain& walked, float lambda_nm) {
-  if (walked.count == 0 || scene.dielectric_shapes.empty()) return std::nullopt;
+  if (walked.count == 0 || walked.count > kMaxRefractedChain || scene.dielectric_shapes.empty()) return std::nullopt;
   SpecularChain own;
   for (int j = 0; j < walked.count; ++j) append_face(scene, walked.faces[j], &own);
   auto path = solve_refracted_path(scene, own, x, y, false, lambda_nm);

@@ -2,13 +2,15 @@
 // Connections through smooth dielectric surfaces: from a point in a medium
 // (excitation rays) or a scattering point on a surface or in a medium (camera
 // paths' next-event estimation toward delta lights: the caustic on a floor) to a
-// point, spot, distant or area light through a chain of up to kMaxSpecularChain
-// dielectric faces, each crossed or mirrored, by solving for the specular path
+// point, spot, distant or area light through a chain of up to kMaxRefractedChain
+// dielectric faces (kMaxSpecularChain for the walls as mirrors), each crossed or
+// mirrored, by solving for the specular path
 // at the hero wavelength (Sellmeier glass bends each λ by its own index).
 //
 // The first chain is the straight line's from the point x to the light point
 // y: the dielectric faces it crosses, in order; the walls of x's vessel give
-// more (deterministic_chains). Two solvers, one per geometry:
+// more, crossed or, where they would totally reflect the light, as mirrors
+// (deterministic_chains). Two solvers, one per geometry:
 // - all faces crossed, parallel planes (box faces, flat-shaded triangles):
 //   Snell's invariant s = n_i sin θ_i, a 1-D monotone root, exact and unique
 //   (the optical path length is strictly convex);
@@ -30,13 +32,13 @@
 // (BSDF-sampled camera paths, `full` mode's excitation continuations): a path
 // the other strategy walks from x to y through specular glass events only is
 // compared with what the deterministic chains (the straight line's, its
-// prefixes, the walls of x's vessel: deterministic_chains) solve from x to y
+// prefixes, the walls of x's vessel crossed and mirrored: deterministic_chains) solve from x to y
 // (same shapes, vertices within tolerance: solved_deterministically); the
 // random seeds' share of a path is 1 − (1 − p)^N (seed_reachable_solution,
 // seeds_miss). Camera paths drop what the chains solve; excitation
 // continuations share by the power heuristic (excitation_connection.h).
 // Continuations keep the paths no seed converges to (more than
-// kMaxSpecularChain faces, spheres). Delta lights have no second strategy:
+// kMaxRefractedChain faces but the mirrors', spheres). Delta lights have no second strategy:
 // those paths are not found (docs/fluorescence.md).
 #include <array>
 #include <optional>
@@ -47,7 +49,13 @@
 
 namespace chlorovdb {
 
-constexpr int kMaxSpecularChain = 4;
+// Faces of the chains the straight line, the walls and the random seeds walk:
+// longer seed chains find rare paths whose SMS estimate has relative variance
+// ≈ 2/p (docs/fluorescence.md, "What reaches the lamp through the glass").
+constexpr int kMaxRefractedChain = 4;
+// Faces of any chain: a wall as a mirror doubles back through the face before it
+// (a cuvette's floor: two faces down, one back, two out).
+constexpr int kMaxSpecularChain = 5;
 
 // ---- Refraction through parallel planes (plane of incidence) ----
 // Layer i has thickness h[i] along the common normal and refractive index n[i]
@@ -85,7 +93,7 @@ struct SpecularChain {
 
 // The dielectric faces crossed by the straight line from x toward y (or along
 // y as a direction to infinity). nullopt when an opaque surface is crossed or
-// more than kMaxSpecularChain dielectric faces are.
+// more than kMaxRefractedChain dielectric faces are.
 std::optional<SpecularChain> straight_line_chain(const Scene& scene, const Vec3& x, const Vec3& y, bool to_infinity);
 
 // The solved specular path: its vertices (face[j].p, on the triangle face[j]
@@ -130,7 +138,7 @@ std::array<double, kMaxSpecularChain + 1> chain_indices(const Scene& scene, cons
 // reflection), up to the leg that passes the light point y (to_infinity: the
 // leg that leaves the scene). Without `reflect_too` it refracts only. nullopt
 // when the ray meets an opaque surface (or, refracting only, total internal
-// reflection) first, never passes y, meets more than kMaxSpecularChain faces
+// reflection) first, never passes y, meets more than kMaxRefractedChain faces
 // or none.
 std::optional<SpecularChain> specular_seed_chain(const Scene& scene, const Vec3& x, const Vec3& d, const Vec3& y,
                                                  bool to_infinity, float lambda_nm, bool reflect_too, Rng& rng);
@@ -148,9 +156,12 @@ std::optional<RefractedPath> solve_from_random_seed(const Scene& scene, const Ve
 // straight line crosses glass, the walls of x's vessel along the world axes
 // toward the light whose faces are flat and parallel (a cuvette's side walls,
 // lid and floor: the light a side panel sends in through the lid or the front
-// wall at a grazing angle). Empty when the straight line meets an opaque surface.
+// wall at a grazing angle), and, for a light at a point, those walls along the
+// axes away from the light as mirrors where they would totally reflect it (a
+// cuvette's floor: the light mirrored up into the liquid near it). Empty when
+// the straight line meets an opaque surface.
 struct DeterministicChains {
-  static constexpr int kMax = 1 + (kMaxSpecularChain - 1) + 3;
+  static constexpr int kMax = 1 + (kMaxRefractedChain - 1) + 3 + 3;
   std::array<SpecularChain, kMax> chains;
   int count = 0;
 };
