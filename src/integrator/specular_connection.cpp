@@ -224,16 +224,15 @@ int wall_chains(const Scene& scene, const Vec3& x, const Vec3& toward, int vesse
 }
 
 // Chains mirrored in an outer face of x's vessel: along each world axis, away
-// from the light, the flat faces of the vessel up to its outer face; the light's
-// mirror image y' in that face's plane; the faces the line from x toward y'
-// crosses up to that face, which reflects it, and the faces the reflected line
-// then crosses toward y. Light a cuvette's floor mirrors by total internal
-// reflection reaches the liquid near the floor this way. Kept only where the
-// line toward y' would be totally reflected (n_x · sin θ > 1 at the face, n_x the
-// index at x relative to the light's side): the partial reflections, a few per
-// cent, are the continuations'.
-int mirror_chains(const Scene& scene, const Vec3& x, const Vec3& y, int vessel, double n_x,
-                  std::span<SpecularChain, 3> mirrors) {
+// from the light, the flat faces of x's vessel (`straight`'s first face's shape)
+// up to its outer face, which mirrors the path back through them, then the
+// straight line's faces toward y. Light a cuvette's floor or lid mirrors by
+// total internal reflection reaches the liquid near it this way. Kept only where
+// the line toward y's mirror image y' would be totally reflected (n_x · sin θ > 1
+// at the face, n_x the index at x relative to the light's side): the partial
+// reflections, a few per cent, are the continuations'.
+int mirror_chains(const Scene& scene, const Vec3& x, const Vec3& y, const SpecularChain& straight, double n_x,
+                  float lambda_nm, std::span<SpecularChain, 3> mirrors) {
   int count = 0;
   const Vec3 toward = y - x;
   const double distance = length(toward);
@@ -246,62 +245,77 @@ int mirror_chains(const Scene& scene, const Vec3& x, const Vec3& y, int vessel, 
     if (!(n_x * n_x * (1.0 - cos_line * cos_line) > 1.0)) continue;
     Vec3 d(0.f);
     d[axis] = toward[axis] > 0.f ? -1.f : 1.f;
-    // The outer face: the last of the (at most two) flat dielectric faces the walk along d crosses.
-    int mirror_shape = -1;
-    Vec3 n;
-    float plane = 0.f;
+    // The faces the walk along d crosses (at most two, flat): the last is the mirror.
+    std::array<ChainFace, 2> along;
+    int k = 0;
     Ray ray{x, d};
-    for (int crossings = 0, faces = 0; crossings < 256; ++crossings) {
+    for (int crossings = 0; crossings < 256; ++crossings) {
       const auto hit = scene.geometry.intersect(ray, kInfinity);
       if (!hit) break;
       const ShapeBinding& b = scene.shapes[hit->shape_id];
       if (!is_pass_through(scene, b)) {
-        if (!scene.is_dielectric(b) || !scene.geometry.flat_face(hit->shape_id, hit->prim_id) || ++faces > 2) break;
-        mirror_shape = hit->shape_id;
-        n = normalize(hit->ng);
-        plane = dot(n, hit->p);
+        if (!scene.is_dielectric(b) || !scene.geometry.flat_face(hit->shape_id, hit->prim_id) || k == 2) break;
+        along[size_t(k++)] = ChainFace{hit->shape_id, hit->prim_id, hit->ng, dot(hit->ng, hit->p), hit->p};
       }
       ray = scene.geometry.spawn_ray(*hit, d);
     }
-    if (mirror_shape < 0) continue;
+    if (k == 0 || along[0].shape_id != straight.faces[0].shape_id || k + (k - 1) + straight.count > kMaxSpecularChain)
+      continue;
+    const Vec3 n = normalize(along[size_t(k - 1)].ng);
+    const float plane = dot(n, along[size_t(k - 1)].p);
     const Vec3 image = y - n * (2.f * (dot(n, y) - plane));
-    const double cos_face = dot(normalize(image - x), n);
-    if (!(n_x * n_x * (1.0 - cos_face * cos_face) > 1.0)) continue;
-    // Walk from x toward the image until the mirror's face, then reflected toward y.
+    const Vec3 down = normalize(image - x);
+    if (!(n_x * n_x * (1.0 - double(dot(down, n)) * dot(down, n)) > 1.0)) continue;
+    // The chain by its faces, not by where a straight line meets them (refraction
+    // in a thin wall moves the path off the unrefracted line's faces): those to
+    // the mirror, the mirror, those back, then the straight line's toward y. The
+    // first guesses treat the wall as thin: the path mirrored at the first face's
+    // plane (point m), its vertices in the wall spread along the wall by the
+    // thickness times tan θ inside it, those toward y where the line from m meets them.
+    const auto meet = [](const Vec3& o, const Vec3& dir, const ChainFace& f, Vec3* p) {
+      const float along_normal = dot(f.ng, dir);
+      if (along_normal == 0.f) return false;
+      const float t = (f.offset - dot(f.ng, o)) / along_normal;
+      *p = o + dir * t;
+      return t > 0.f;
+    };
+    const ChainFace& inner = along[0];
+    const Vec3 n0 = normalize(inner.ng);
+    const float plane0 = dot(n0, inner.p);
+    const Vec3 toward_inner_image = normalize(y - n0 * (2.f * (dot(n0, y) - plane0)) - x);
+    Vec3 m;
+    if (!meet(x, toward_inner_image, inner, &m)) continue;
+    Vec3 lateral = toward_inner_image - n0 * dot(toward_inner_image, n0);
+    const float sin_x = length(lateral);
+    lateral = sin_x > 0.f ? lateral / sin_x : Vec3(0.f);
+    SpecularChain first;
+    append_face(scene, inner, &first);
+    const double sin_wall = sin_x / chain_indices(scene, first, x, lambda_nm)[1];  // Snell into the wall
+    const float shift = k > 1 && sin_wall < 1.0 ? std::fabs(plane - dot(n, inner.p)) *
+                                                      float(sin_wall / std::sqrt(1.0 - sin_wall * sin_wall))
+                                                : 0.f;
     SpecularChain c;
-    ray = Ray{x, normalize(image - x)};
-    bool mirrored = false, ok = true;
-    for (int crossings = 0; crossings < 256 && ok; ++crossings) {
-      const auto hit = scene.geometry.intersect(ray, kInfinity);
-      if (mirrored) {  // past the faces before y (a light on a surface passes too, as in specular_seed_chain)
-        const float t_y = dot(y - ray.o, ray.d);
-        if (!hit || (t_y > 0.f && t_y * (1.f - kStopShort) < hit->t)) break;
-      }
-      if (!hit) {
-        ok = false;
-        break;
-      }
-      const ShapeBinding& b = scene.shapes[hit->shape_id];
-      if (is_pass_through(scene, b)) {
-        ray = scene.geometry.spawn_ray(*hit, ray.d);
-        continue;
-      }
-      if (!scene.is_dielectric(b) || c.count == kMaxSpecularChain) {
-        ok = false;
-        break;
-      }
-      const bool reflect = !mirrored && hit->shape_id == mirror_shape &&
-                           std::fabs(dot(normalize(hit->ng), n)) > kParallelCos &&
-                           std::fabs(dot(n, hit->p) - plane) <= 1e-4f * length(toward);
-      append_face(scene, ChainFace{hit->shape_id, hit->prim_id, hit->ng, dot(hit->ng, hit->p), hit->p, reflect}, &c);
-      Vec3 dir = ray.d;
-      if (reflect) {
-        mirrored = true;
-        dir = dir - n * (2.f * dot(dir, n));
-      }
-      ray = scene.geometry.spawn_ray(*hit, dir);
+    for (int j = 0; j < k; ++j) {
+      ChainFace f = along[size_t(j)];
+      f.p = m - lateral * (j == 0 ? shift : 0.f) +
+            normalize(f.ng) * (dot(normalize(f.ng), f.p) - dot(normalize(f.ng), m));
+      f.reflect = j == k - 1;
+      append_face(scene, f, &c);
     }
-    if (ok && mirrored && c.faces[0].shape_id == vessel) mirrors[size_t(count++)] = c;
+    for (int j = k - 2; j >= 0; --j) {
+      ChainFace f = along[size_t(j)];
+      f.p = m + lateral * shift;
+      append_face(scene, f, &c);
+    }
+    const Vec3 from = m + lateral * shift;
+    const Vec3 up = normalize(y - from);
+    bool ok = true;
+    for (int j = 0; j < straight.count && ok; ++j) {
+      ChainFace f = straight.faces[size_t(j)];
+      ok = meet(from, up, f, &f.p);
+      append_face(scene, f, &c);
+    }
+    if (ok) mirrors[size_t(count++)] = c;
   }
   return count;
 }
@@ -326,7 +340,7 @@ DeterministicChains chains_of_kind(const Scene& scene, const Vec3& x, const Vec3
     std::array<SpecularChain, 3> mirrors;
     // x's index relative to the light's side (chain_indices are relative to x's).
     const double n_x = 1.0 / chain_indices(scene, *chain, x, lambda_nm)[size_t(chain->count)];
-    const int m = mirror_chains(scene, x, y, vessel, n_x, mirrors);
+    const int m = mirror_chains(scene, x, y, *chain, n_x, lambda_nm, mirrors);
     for (int i = 0; i < m; ++i) out.chains[size_t(out.count++)] = mirrors[size_t(i)];
   };
   if (kinds == ChainKinds::mirrored) {
@@ -364,6 +378,7 @@ std::optional<RefractedPath> deterministic_solution(const Scene& scene, const Ve
     const SpecularChain& c = candidates.chains[size_t(i)];
     if (c.count != walked.count) continue;
     const auto path = solve_refracted_path(scene, c, x, y, false, lambda_nm);
+
     if (path &&
         same_vertices({path->face.data(), size_t(path->count)}, {walked.faces.data(), size_t(walked.count)}, tolerance))
       return path;
