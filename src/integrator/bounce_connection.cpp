@@ -29,10 +29,9 @@ StrategyDensities strategy_densities(const Scene& scene, const ContinuationOrigi
   const Light& light = scene.lights[light_index];
   const int slot = fp.slot_of_light(light_index);
   const auto* area = std::get_if<AreaLight>(&light);
-  const auto position = light_position(light);
   StrategyDensities p;
-  if (slot < 0 || (!area && !position)) return p;
-  const Vec3 to_light = (area ? y.p : *position) - z;
+  if (slot < 0 || (!area && !light_position(light))) return p;
+  const Vec3 to_light = y.p - z;
   const float d2 = dot(to_light, to_light);
   const Vec3 wi = to_light / std::sqrt(d2);
   const float bounce_choice =

@@ -1,6 +1,7 @@
 #include "integrator/path_tracer.h"
 
 #include <cmath>
+#include <utility>
 
 #include "core/sampling.h"
 #include "integrator/bounce_connection.h"
@@ -359,9 +360,11 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
     const auto bs = bsdf.sample(wo, rng.uniform(), Point2{rng.uniform(), rng.uniform()});
     if (!bs || bs->pdf == 0.f) break;
     if (!bsdf.is_specular()) {
-      const SpecularChain to_z = walked;
+      // The walk to z is kept only where the bounce connection can share its light.
+      std::optional<BounceVertex> at_z;
+      if (weigh_against_bounce) at_z = BounceVertex{walked, *hit, bs->pdf};
       start_walk(v.origin);
-      if (weigh_against_bounce) bounce_vertex = BounceVertex{to_z, *hit, bs->pdf};
+      bounce_vertex = std::move(at_z);
     } else if (walked_only_glass) {
       const bool glass = bs->is_specular && std::holds_alternative<Dielectric>(scene.materials[binding.material]);
       if (glass && walked.count < kMaxSpecularChain)
