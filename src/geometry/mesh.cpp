@@ -82,7 +82,8 @@ int ply_type_size(const std::string& type) {
 // Assimp 5.2's PLY reader trusts the header: without an end_header line it reads
 // past its buffer (a crash: upstream assimp#4843, fixed after 5.2.5), and it allocates
 // what the header declares before reading any data (4294967295 vertices in a
-// 200-byte file asked for 48 GB). So a file starting with "ply" in any case (the magic
+// 200-byte file asked for 48 GB, and a count can hide in an element's name: see
+// below). So a file starting with "ply" in any case (the magic
 // Assimp's reader accepts, whatever the file's extension) is checked first:
 // every header line must be one the format defines, the header must end, and the
 // declared elements must fit in the bytes after it (binary: each instance takes its
@@ -128,6 +129,11 @@ void check_ply_header(const std::filesystem::path& file, const std::string& name
       if (!has_format || a.empty() || !c.empty() ||
           std::from_chars(b.data(), b.data() + b.size(), e.count).ec != std::errc() || b.empty())
         throw refuse(number, "must be \"element NAME COUNT\" after the format line");
+      // Assimp reads an element of a name it does not know from the name's first
+      // character on, so it takes the count from a name's leading digits
+      // ("element 4294967295ex 4" asked for 96 GB).
+      if (!std::isalpha(static_cast<unsigned char>(a[0])) && a[0] != '_')
+        throw refuse(number, "an element's name must start with a letter or '_'");
       elements.push_back(e);
     } else if (keyword == "property") {
       const bool list = a == "list";

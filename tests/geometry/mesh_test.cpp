@@ -295,6 +295,9 @@ TEST(MeshLoad, MalformedPlyHeaderIsRefusedNamingTheLine) {
       {"ply\nformat ascii 1.0\nelement face 4\nproperty list uchar vertex_indices\nend_header\n", "line 4"},
       {"ply\nformat ascii 1.0\nelement vertex 4\nproperty quaternion x\nend_header\n", "line 4"},
       {"plyx\nformat ascii 1.0\n", "line 1"},
+      // Assimp takes an unknown element's count from its name's leading digits: a
+      // fuzzer's out-of-memory (fuzz/crashes/mesh/ply-element-name-with-a-count-oom-*).
+      {"ply\nformat ascii 1.0\nelement 4294967295ex 4\nproperty float x\nend_header\n", "line 3"},
       // Assimp takes the magic in any case: a fuzzer's hang (fuzz/crashes/mesh/ply-capitalised-magic-*).
       {"Ply\nformat ascii 1.0\nentemel vertex 3\nproperty float x\n", "line 3"},
       {"PLYx\nformat ascii 1.0\n", "line 1"},
