@@ -75,18 +75,25 @@ Estimate fluorescence_beside_lit_floor(Lamp lamp, bool glass, bool bounce) {
                            (glass ? "glass" : "spill") + (bounce ? "_on" : "_off");
   const Scene scene = load_scene(write_scene(name, vessel_beside_a_lit_floor(lamp, glass, bounce)));
   const Estimate e = red_fluorescence_along(scene, Ray{{0.015f, 0.006f, 0.2f}, {0, 0, -1}}, 200000, 17);
-  std::printf("%s: %.5g ± %.2g (%.1f %%)\n", name.c_str(), e.mean(), e.sigma(), 100 * e.sigma() / e.mean());
+  std::printf("%s: %.5g ± %.2g (%.1f %%), typical σ %.2g\n", name.c_str(), e.mean(), e.sigma(),
+              100 * e.sigma() / e.mean(), e.typical_sigma());
   return e;
 }
 
-// With and without the bounce within 4σ, far from zero; returns σ_on / σ_off.
-double expect_the_same_light(Lamp lamp, bool glass) {
+// σ with the bounce over σ without: from the sample σ, and from the typical σ
+// with the bounce (see Estimate::typical_sigma).
+struct NoiseRatio {
+  double sample, typical;
+};
+
+// With and without the bounce within 4σ, far from zero.
+NoiseRatio expect_the_same_light(Lamp lamp, bool glass) {
   const Estimate off = fluorescence_beside_lit_floor(lamp, glass, false);
   const Estimate on = fluorescence_beside_lit_floor(lamp, glass, true);
   const double sigma = std::sqrt(off.sigma() * off.sigma() + on.sigma() * on.sigma());
   EXPECT_NEAR(on.mean(), off.mean(), 4 * sigma);
   EXPECT_GT(on.mean(), 20 * on.sigma());
-  return on.sigma() / off.sigma();
+  return {on.sigma() / off.sigma(), on.typical_sigma() / off.sigma()};
 }
 
 TEST(BounceConnection, NearFloorLightIsCountedOnceThroughGlassAndOnAStraightLine) {
@@ -100,19 +107,28 @@ TEST(BounceConnection, NearFloorLightIsCountedOnceThroughGlassAndOnAStraightLine
 TEST(BounceConnection, FarFloorLightIsCountedOnceWithLessNoise) {
   // Through glass, continuations keep the paths the walls reflect (about a
   // third of the noise left); on a straight line the bounce takes nearly all.
-  EXPECT_LT(expect_the_same_light(Lamp::far_spot, true), 0.5);
-  EXPECT_LT(expect_the_same_light(Lamp::far_spot, false), 0.1);
+  EXPECT_LT(expect_the_same_light(Lamp::far_spot, true).sample, 0.5);
+  EXPECT_LT(expect_the_same_light(Lamp::far_spot, false).sample, 0.1);
 }
 
 TEST(BounceConnection, AreaLightsFloorLightIsCountedOnceWithLessNoise) {
   // The low panel: the continuations' BSDF samples from the floor hit it often;
   // left at their full weight (checked) the fluorescence read 0.00110 ± 0.00006
   // and 0.00196 ± 0.00005 against 0.00081 ± 0.00009 and 0.00148 ± 0.00009.
-  EXPECT_LT(expect_the_same_light(Lamp::low_panel, true), 0.1);
-  EXPECT_LT(expect_the_same_light(Lamp::low_panel, false), 0.1);
+  // On a straight line the bounce takes nearly all of the noise (0.036–0.046 over
+  // 17 seeds). Through glass what it leaves is rare spikes: continuations that
+  // cross the glass more than four times (trapped between the outer faces, out
+  // through the bottom onto the floor beside the panel) and take the panel's
+  // light by their shadow ray, at a thousand times the mean, one in 10⁵ paths;
+  // no chain of the bounce has that many interfaces, so they are the same with it
+  // and without. They set the sample σ ratio (0.05–0.45 over 17 seeds, a clang
+  // build 0.20), so the bounce's own gain is read from the typical σ (0.02–0.12;
+  // without the bounce it reads about 1).
+  EXPECT_LT(expect_the_same_light(Lamp::low_panel, true).typical, 0.25);
+  EXPECT_LT(expect_the_same_light(Lamp::low_panel, false).sample, 0.1);
   // Over the table the continuations keep much of the weight.
-  EXPECT_LT(expect_the_same_light(Lamp::panel_over_a_table, true), 0.8);
-  EXPECT_LT(expect_the_same_light(Lamp::panel_over_a_table, false), 0.8);
+  EXPECT_LT(expect_the_same_light(Lamp::panel_over_a_table, true).sample, 0.8);
+  EXPECT_LT(expect_the_same_light(Lamp::panel_over_a_table, false).sample, 0.8);
 }
 
 }  // namespace
