@@ -205,8 +205,8 @@ int render(const RenderArgs& a) {
                100.0 * excitation_grid_error(scene));
   if (const std::string routes = describe_excitation_routes(r.paths.excitation_routes); !routes.empty())
     fmt::print(stderr,
-               "fluorescence seen, by what excited it (share of the mean / of the second moment per event, hero "
-               "wavelength): {}\n",
+               "fluorescence seen, by what excited it (share of the mean / of the second moment per event, "
+               "lanes' average): {}\n",
                routes);
   if (r.nonfinite_samples > 0) fmt::print(stderr, "warning: {} non-finite samples were dropped\n", r.nonfinite_samples);
   return r.interrupted ? 130 : 0;

@@ -17,8 +17,10 @@ constexpr int kExcitationRoutes = 5;
 inline constexpr std::array<const char*, kExcitationRoutes> kExcitationRouteKeys = {
     "connection", "bounce", "continuation_light", "continuation_reemitted", "photons"};
 
-// Per route, the sum of the events' hero-wavelength contributions to the camera
-// paths' fluorescence (each times its camera path's weight), of their squares,
+// Per route, the sum of the events' contributions to the camera paths'
+// fluorescence (each times its camera path's weight, averaged over the lanes the
+// path carries: an event whose hero wavelength lies outside the emission band
+// still counts by its other lanes), of their squares,
 // and how many events it contributed to: the routes' shares of the fluorescence
 // layer's mean and of its second moment per event, and how often each route
 // finds anything (docs/fluorescence.md, "Where the excitation comes from").

@@ -227,7 +227,8 @@ float continuation_radiance(const Scene& scene, const ContinuationOrigin& origin
 
 SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, float t_end, int medium,
                                             PreparedMedia& media, Rng& rng, PathStats& stats, int depth,
-                                            int* continuations, std::array<float, kExcitationRoutes>* routes) {
+                                            int* continuations,
+                                            std::array<SampledSpectrum, kExcitationRoutes>* routes) {
   const auto& pigments = scene.fluorescence[medium];
   const SampledWavelengths& lambda = media.lambda();
   const int n = lambda.count();
@@ -286,8 +287,9 @@ SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, 
       if (const ExcitationGrid::Lookup absorbed = grid->at(x); absorbed.values)
         for (int b = 0; b < ExcitationGrid::kBins; ++b)
           add_emission(kAbsorptionPerMolarExtinction * c * absorbed.profile * absorbed.values[b], ExcitationGrid::bin_center(b));
-    if (routes) *routes = {0.f, 0.f, 0.f, 0.f, T[0] * j[0] / (ds.pdf * p_pigment)};
-    return T * j / (ds.pdf * p_pigment);
+    const SampledSpectrum estimate = T * j / (ds.pdf * p_pigment);
+    if (routes) *routes = {SampledSpectrum{}, SampledSpectrum{}, SampledSpectrum{}, SampledSpectrum{}, estimate};
+    return estimate;
   }
   const bool may_continue = scene.settings.fluorescence == FluorescenceMode::full && depth < kMaxContinuationDepth;
   const float p_continue = may_continue ? continuation_probability(depth, *continuations) : 0.f;
@@ -299,12 +301,12 @@ SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, 
   float lp = 0.f;
   const float direct = direct_excitation(scene, origin, c, rng, stats, &lp);
   add_emission(direct, lp);
-  const float j_connection = j[0];
+  const SampledSpectrum j_connection = j;
   if (bounce) {
     const BounceExcitation b = bounce_excitation(scene, origin, c, rng, stats);
     add_emission(b.absorbed, b.lambda);
   }
-  const float j_bounce = j[0] - j_connection;
+  const SampledSpectrum j_bounce = j - j_connection;
   float reemitted_share = 0.f;
   if (may_continue && rng.uniform() < p_continue) {
     ++*continuations;
@@ -313,10 +315,11 @@ SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, 
   }
 
   if (routes) {
-    const float j_continuation = j[0] - j_connection - j_bounce;
-    const float to_lane0 = T[0] / (ds.pdf * p_pigment);
-    *routes = {j_connection * to_lane0, j_bounce * to_lane0, j_continuation * (1.f - reemitted_share) * to_lane0,
-               j_continuation * reemitted_share * to_lane0, 0.f};
+    const SampledSpectrum to_estimate = T / (ds.pdf * p_pigment);
+    const SampledSpectrum j_continuation = j - j_connection - j_bounce;
+    *routes = {j_connection * to_estimate, j_bounce * to_estimate,
+               j_continuation * (1.f - reemitted_share) * to_estimate, j_continuation * reemitted_share * to_estimate,
+               SampledSpectrum{}};
   }
   return T * j / (ds.pdf * p_pigment);
 }

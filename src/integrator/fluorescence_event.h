@@ -17,11 +17,12 @@ namespace chlorovdb {
 // render.excitation_sampling = uniform draws λ' uniformly over the same band
 // (the ExcitationSampler knows its mode); render.quantum_yield_mode = roulette
 // keeps the event with probability Q at weight 1 instead of weighting it by Q.
-// `routes`, if given, receives the hero wavelength's estimate split by
-// excitation route (they sum to the result's first lane).
+// `routes`, if given, receives the estimate split by excitation route, every
+// lane (they sum to the result).
 SampledSpectrum estimate_fluorescence_along(const Scene& scene, const Ray& ray, float t_end, int medium,
                                             PreparedMedia& media, Rng& rng, PathStats& stats, int depth,
-                                            int* continuations, std::array<float, kExcitationRoutes>* routes = nullptr);
+                                            int* continuations,
+                                            std::array<SampledSpectrum, kExcitationRoutes>* routes = nullptr);
 
 // Full mode continues an excitation path at an event with probability
 //   P = 0.5^(depth + 1) / (1 + k)^2,

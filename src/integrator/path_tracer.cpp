@@ -184,13 +184,13 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
         const SampledSpectrum weight = beta / r_u.average(n);
         const float gap = std::max(0.f, dot(ray.o - segment_start, ray.d));
         const bool camera_path = options.fluorescence_depth == 0;
-        std::array<float, kExcitationRoutes> routes{};
+        std::array<SampledSpectrum, kExcitationRoutes> routes{};
         L.fluorescence += weight * estimate_fluorescence_along(scene, Ray{ray.o - ray.d * gap, ray.d}, t_end + gap,
                                                                medium, media, rng, stats, options.fluorescence_depth,
                                                                &continuations, camera_path ? &routes : nullptr);
         if (camera_path) {
           std::array<double, kExcitationRoutes> weighted;
-          for (size_t r = 0; r < weighted.size(); ++r) weighted[r] = double(weight[0]) * routes[r];
+          for (size_t r = 0; r < weighted.size(); ++r) weighted[r] = double((weight * routes[r]).average(n));
           stats.excitation_routes.add_event(weighted);
         }
       }

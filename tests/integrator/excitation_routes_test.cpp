@@ -30,7 +30,7 @@ Scene slab_over_floor(const std::string& mode) {
 }
 
 struct Traced {
-  double fluorescence = 0;  // Σ of the paths' fluorescence at the hero wavelength
+  double fluorescence = 0;  // Σ of the paths' fluorescence, averaged over their lanes
   ExcitationRouteSums routes;
 };
 
@@ -42,7 +42,7 @@ Traced trace(const Scene& scene, int paths) {
     Rng rng(test_seed(29), uint64_t(i));
     SampledWavelengths lambda = SampledWavelengths::from_values(lambdas, pdf, 4);
     t.fluorescence +=
-        trace_path(scene, Ray{{0, 0, 1}, {0, 0, -1}}, scene.camera_medium, lambda, rng, stats).fluorescence[0];
+        trace_path(scene, Ray{{0, 0, 1}, {0, 0, -1}}, scene.camera_medium, lambda, rng, stats).fluorescence.average(4);
   }
   t.routes = stats.excitation_routes;
   return t;
