@@ -236,6 +236,8 @@ int mirror_chains(const Scene& scene, const Vec3& x, const Vec3& y, const Specul
   int count = 0;
   const Vec3 toward = y - x;
   const double distance = length(toward);
+  // y's mirror image in the plane of unit normal n at offset `plane`.
+  const auto image_of_y = [&y](const Vec3& n, float plane) { return y - n * (2.f * (dot(n, y) - plane)); };
   for (int axis = 0; axis < 3; ++axis) {
     if (toward[axis] == 0.f) continue;
     // The line toward the image is steepest to the face when the face passes
@@ -263,8 +265,7 @@ int mirror_chains(const Scene& scene, const Vec3& x, const Vec3& y, const Specul
       continue;
     const Vec3 n = normalize(along[size_t(k - 1)].ng);
     const float plane = dot(n, along[size_t(k - 1)].p);
-    const Vec3 image = y - n * (2.f * (dot(n, y) - plane));
-    const Vec3 down = normalize(image - x);
+    const Vec3 down = normalize(image_of_y(n, plane) - x);
     if (!(n_x * n_x * (1.0 - double(dot(down, n)) * dot(down, n)) > 1.0)) continue;
     // The chain by its faces, not by where a straight line meets them (refraction
     // in a thin wall moves the path off the unrefracted line's faces): those to
@@ -282,7 +283,7 @@ int mirror_chains(const Scene& scene, const Vec3& x, const Vec3& y, const Specul
     const ChainFace& inner = along[0];
     const Vec3 n0 = normalize(inner.ng);
     const float plane0 = dot(n0, inner.p);
-    const Vec3 toward_inner_image = normalize(y - n0 * (2.f * (dot(n0, y) - plane0)) - x);
+    const Vec3 toward_inner_image = normalize(image_of_y(n0, plane0) - x);
     Vec3 m;
     if (!meet(x, toward_inner_image, inner, &m)) continue;
     Vec3 lateral = toward_inner_image - n0 * dot(toward_inner_image, n0);
@@ -378,7 +379,6 @@ std::optional<RefractedPath> deterministic_solution(const Scene& scene, const Ve
     const SpecularChain& c = candidates.chains[size_t(i)];
     if (c.count != walked.count) continue;
     const auto path = solve_refracted_path(scene, c, x, y, false, lambda_nm);
-
     if (path &&
         same_vertices({path->face.data(), size_t(path->count)}, {walked.faces.data(), size_t(walked.count)}, tolerance))
       return path;
