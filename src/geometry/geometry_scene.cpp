@@ -37,7 +37,6 @@ struct MeshShape {
   TriangleMesh mesh;  // world space
   Distribution1D triangle_pdf;  // by area
   float area;
-  bool flat = true;  // every triangle flat (flat_face)
 };
 
 struct SphereShape {
@@ -329,16 +328,12 @@ int GeometryScene::add_mesh(TriangleMesh mesh, const Transform& world_from_objec
   rtcReleaseGeometry(geom);
   impl_->check("adding a triangle mesh");
 
-  const int mesh_triangles = mesh.triangle_count();
-  std::vector<float> areas(mesh_triangles);
-  for (int t = 0; t < mesh_triangles; ++t) areas[t] = triangle_area(mesh, t);
+  std::vector<float> areas(mesh.triangle_count());
+  for (int t = 0; t < mesh.triangle_count(); ++t) areas[t] = triangle_area(mesh, t);
   MeshShape shape{std::move(mesh), Distribution1D(areas), 0.f};
   shape.area = shape.triangle_pdf.total();
   impl_->shapes.emplace_back(std::move(shape));
   ++impl_->embree_shapes;
-  bool flat = true;
-  for (int t = 0; t < mesh_triangles && flat; ++t) flat = flat_face(id, t);
-  std::get<MeshShape>(impl_->shapes.back()).flat = flat;
   return id;
 }
 
@@ -430,13 +425,6 @@ bool GeometryScene::flat_face(int shape_id, int prim_id) const {
   for (const Vec3& n : patch->n)
     if (dot(n, patch->ng) < 1.f - 1e-6f) return false;
   return true;
-}
-
-bool GeometryScene::flat_shape(int shape_id) const {
-  const auto& shape = impl_->shapes[shape_id];
-  if (std::holds_alternative<BoxShape>(shape)) return true;
-  const auto* m = std::get_if<MeshShape>(&shape);
-  return m && m->flat;
 }
 
 std::optional<SurfacePatch> GeometryScene::surface_patch(int shape_id, int prim_id) const {

@@ -73,8 +73,6 @@ class GeometryScene {
   // shading normals or whose three vertex normals equal the face normal.
   // Spheres and smooth-shaded triangles are not.
   bool flat_face(int shape_id, int prim_id) const;
-  // True when every face of the shape is flat (boxes, flat-shaded meshes).
-  bool flat_shape(int shape_id) const;
   // The patch of (shape_id, prim_id); nullopt for spheres (not piecewise planar).
   std::optional<SurfacePatch> surface_patch(int shape_id, int prim_id) const;
 

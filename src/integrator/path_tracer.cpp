@@ -151,7 +151,7 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
       walk_hit = *at.hit;  // the vertex's hit storage is reused by the next bounce
       walk_from.hit = &walk_hit;
     }
-    walked = SpecularChain{};
+    walked.count = 0;
     walked_only_glass = area_through_glass;
     walk_from_excitation_origin = false;
     bounce_vertex.reset();
@@ -367,10 +367,11 @@ PathRadiance trace_path_from(const Scene& scene, Ray ray, int medium, SampledWav
       bounce_vertex = std::move(at_z);
     } else if (walked_only_glass) {
       const bool glass = bs->is_specular && std::holds_alternative<Dielectric>(scene.materials[binding.material]);
-      walked_only_glass = glass && extend_chain(scene,
-                                                ChainFace{hit->shape_id, hit->prim_id, hit->ng, dot(hit->ng, hit->p),
-                                                          hit->p, !bs->is_transmission},
-                                                kMaxMirroredChain, &walked);
+      if (glass && walked.count < kMaxSpecularChain)
+        walked.faces[walked.count++] =
+            ChainFace{hit->shape_id, hit->prim_id, hit->ng, dot(hit->ng, hit->p), hit->p, !bs->is_transmission};
+      else
+        walked_only_glass = false;
     }
     beta *= bs->f * std::fabs(dot(bs->wi, hit->ns)) / bs->pdf;
     r_l = r_u / bs->pdf;

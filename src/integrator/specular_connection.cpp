@@ -40,25 +40,9 @@ bool leg_reaches_face(const Scene& scene, Ray ray, float dist, const ChainFace& 
 // Appends a face, keeping planar_parallel up to date.
 void append_face(const Scene& scene, const ChainFace& f, SpecularChain* c) {
   if (f.reflect || !scene.geometry.flat_face(f.shape_id, f.prim_id)) c->planar_parallel = false;
-  if (!scene.geometry.flat_shape(f.shape_id)) c->flat_shapes = false;
   if (c->count > 0 && std::fabs(dot(f.ng, c->faces[0].ng)) < kParallelCos) c->planar_parallel = false;
   c->faces[c->count++] = f;
 }
-
-}  // namespace
-
-bool chain_can_extend(const Scene& scene, const SpecularChain& c, int shape_id, int limit) {
-  if (c.count < limit) return true;
-  return c.count < kMaxSpecularChain && c.flat_shapes && scene.geometry.flat_shape(shape_id);
-}
-
-bool extend_chain(const Scene& scene, const ChainFace& f, int limit, SpecularChain* c) {
-  if (!chain_can_extend(scene, *c, f.shape_id, limit)) return false;
-  append_face(scene, f, c);
-  return true;
-}
-
-namespace {
 // Appends the hit's face to the chain; false when the surface is opaque (not a
 // dielectric) or the chain is full.
 bool append_dielectric_face(const Scene& scene, const SurfaceHit& hit, SpecularChain* c) {
@@ -277,7 +261,8 @@ int mirror_chains(const Scene& scene, const Vec3& x, const Vec3& y, const Specul
       }
       ray = scene.geometry.spawn_ray(*hit, d);
     }
-    if (k == 0 || along[0].shape_id != straight.faces[0].shape_id) continue;
+    if (k == 0 || along[0].shape_id != straight.faces[0].shape_id || k + (k - 1) + straight.count > kMaxSpecularChain)
+      continue;
     const Vec3 n = normalize(along[size_t(k - 1)].ng);
     const float plane = dot(n, along[size_t(k - 1)].p);
     const Vec3 down = normalize(image_of_y(n, plane) - x);
@@ -310,26 +295,26 @@ int mirror_chains(const Scene& scene, const Vec3& x, const Vec3& y, const Specul
     const float shift = k > 1 && sin_wall < 1.0 ? std::fabs(plane - dot(n, inner.p)) *
                                                       float(sin_wall / std::sqrt(1.0 - sin_wall * sin_wall))
                                                 : 0.f;
-    // Limited as walks are (extend_chain): a walk can match only a chain it could be.
     SpecularChain c;
-    bool ok = true;
-    for (int j = 0; j < k && ok; ++j) {
+    for (int j = 0; j < k; ++j) {
       ChainFace f = along[size_t(j)];
       f.p = m - lateral * (j == 0 ? shift : 0.f) +
             normalize(f.ng) * (dot(normalize(f.ng), f.p) - dot(normalize(f.ng), m));
       f.reflect = j == k - 1;
-      ok = extend_chain(scene, f, kMaxMirroredChain, &c);
+      append_face(scene, f, &c);
     }
-    for (int j = k - 2; j >= 0 && ok; --j) {
+    for (int j = k - 2; j >= 0; --j) {
       ChainFace f = along[size_t(j)];
       f.p = m + lateral * shift;
-      ok = extend_chain(scene, f, kMaxMirroredChain, &c);
+      append_face(scene, f, &c);
     }
     const Vec3 from = m + lateral * shift;
     const Vec3 up = normalize(y - from);
+    bool ok = true;
     for (int j = 0; j < straight.count && ok; ++j) {
       ChainFace f = straight.faces[size_t(j)];
-      ok = meet(from, up, f, &f.p) && extend_chain(scene, f, kMaxMirroredChain, &c);
+      ok = meet(from, up, f, &f.p);
+      append_face(scene, f, &c);
     }
     if (ok) mirrors[size_t(count++)] = c;
   }
@@ -486,7 +471,7 @@ std::optional<SpecularChain> specular_seed_chain(const Scene& scene, const Vec3&
       ray = scene.geometry.spawn_ray(*hit, ray.d);
       continue;
     }
-    if (!scene.is_dielectric(b) || !chain_can_extend(scene, c, hit->shape_id, kMaxRefractedChain)) return std::nullopt;
+    if (!scene.is_dielectric(b) || c.count == kMaxRefractedChain) return std::nullopt;
     // As the glass scatters: reflected with probability R (1 under total internal reflection).
     const Vec3 wo = -ray.d;
     const float eta = ior_at(dielectric_of(scene, hit->shape_id), lambda_nm);
@@ -692,10 +677,9 @@ std::optional<RefractedPath> solve_from_random_seed(const Scene& scene, const Ve
 
 std::optional<RefractedPath> seed_reachable_solution(const Scene& scene, const Vec3& x, const Vec3& y,
                                                      const SpecularChain& walked, float lambda_nm) {
-  if (walked.count == 0 || scene.dielectric_shapes.empty()) return std::nullopt;
+  if (walked.count == 0 || walked.count > kMaxRefractedChain || scene.dielectric_shapes.empty()) return std::nullopt;
   SpecularChain own;
-  for (int j = 0; j < walked.count; ++j)
-    if (!extend_chain(scene, walked.faces[j], kMaxRefractedChain, &own)) return std::nullopt;
+  for (int j = 0; j < walked.count; ++j) append_face(scene, walked.faces[j], &own);
   auto path = solve_refracted_path(scene, own, x, y, false, lambda_nm);
   const float tolerance = kOwnedVertexTolerance * length(y - x);
   if (!path ||

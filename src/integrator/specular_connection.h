@@ -3,9 +3,8 @@
 // (excitation rays) or a scattering point on a surface or in a medium (camera
 // paths' next-event estimation toward delta lights: the caustic on a floor) to a
 // point, spot, distant or area light through a chain of up to kMaxRefractedChain
-// dielectric faces (kMaxMirroredChain for the walls as mirrors; kMaxSpecularChain
-// through glass of flat faces alone), each crossed or mirrored, by solving for
-// the specular path
+// dielectric faces (kMaxSpecularChain for the walls as mirrors), each crossed or
+// mirrored, by solving for the specular path
 // at the hero wavelength (Sellmeier glass bends each λ by its own index).
 //
 // The first chain is the straight line's from the point x to the light point
@@ -38,9 +37,9 @@
 // random seeds' share of a path is 1 − (1 − p)^N (seed_reachable_solution,
 // seeds_miss). Camera paths drop what the chains solve; excitation
 // continuations share by the power heuristic (excitation_connection.h).
-// Continuations keep the paths no seed converges to (more faces than
-// chain_can_extend allows, the mirrors' aside; spheres). Delta lights have no
-// second strategy: those paths are not found (docs/fluorescence.md).
+// Continuations keep the paths no seed converges to (more than
+// kMaxRefractedChain faces but the mirrors', spheres). Delta lights have no second strategy:
+// those paths are not found (docs/fluorescence.md).
 #include <array>
 #include <optional>
 #include <span>
@@ -51,19 +50,12 @@
 namespace chlorovdb {
 
 // Faces of the chains the straight line, the walls and the random seeds walk:
-// longer seed chains through curved glass find rare paths whose SMS estimate has
-// relative variance ≈ 2/p (docs/fluorescence.md, "What reaches the lamp through
-// the glass").
+// longer seed chains find rare paths whose SMS estimate has relative variance
+// ≈ 2/p (docs/fluorescence.md, "What reaches the lamp through the glass").
 constexpr int kMaxRefractedChain = 4;
-// Faces of the walls as mirrors and of the continuations' walks: a wall as a
-// mirror doubles back through the face before it (a cuvette's floor: two faces
-// down, one back, two out).
-constexpr int kMaxMirroredChain = 5;
-// Faces of any chain, which only glass of flat faces (boxes, flat-shaded
-// meshes) reaches past the two limits above: a cuvette's wall pipes light by
-// total reflection, seven faces from the liquid to a lamp beside it.
-constexpr int kMaxSpecularChain = 7;
-static_assert(kMaxRefractedChain < kMaxMirroredChain && kMaxMirroredChain < kMaxSpecularChain);
+// Faces of any chain: a wall as a mirror doubles back through the face before it
+// (a cuvette's floor: two faces down, one back, two out).
+constexpr int kMaxSpecularChain = 5;
 
 // ---- Refraction through parallel planes (plane of incidence) ----
 // Layer i has thickness h[i] along the common normal and refractive index n[i]
@@ -97,18 +89,7 @@ struct SpecularChain {
   std::array<ChainFace, kMaxSpecularChain> faces;
   int count = 0;
   bool planar_parallel = true;  // all faces crossed, flat-shaded planes with parallel normals
-  bool flat_shapes = true;      // all faces on shapes of flat faces (boxes, flat-shaded meshes)
 };
-
-// Whether the chain can take one more face, on shape `shape_id`: up to `limit`
-// faces (kMaxRefractedChain or kMaxMirroredChain) on any glass, up to
-// kMaxSpecularChain while every face lies on a shape of flat faces. The random
-// seeds and seed_reachable_solution take kMaxRefractedChain, the mirror chains
-// and the continuations' walks kMaxMirroredChain, so a path one strategy
-// returns is one the other can share.
-bool chain_can_extend(const Scene& scene, const SpecularChain& c, int shape_id, int limit);
-// Appends f when chain_can_extend; false (and the chain unchanged) otherwise.
-bool extend_chain(const Scene& scene, const ChainFace& f, int limit, SpecularChain* c);
 
 // The dielectric faces crossed by the straight line from x toward y (or along
 // y as a direction to infinity). nullopt when an opaque surface is crossed or
@@ -157,8 +138,8 @@ std::array<double, kMaxSpecularChain + 1> chain_indices(const Scene& scene, cons
 // reflection), up to the leg that passes the light point y (to_infinity: the
 // leg that leaves the scene). Without `reflect_too` it refracts only. nullopt
 // when the ray meets an opaque surface (or, refracting only, total internal
-// reflection) first, never passes y, meets more faces than chain_can_extend
-// allows (kMaxRefractedChain) or none.
+// reflection) first, never passes y, meets more than kMaxRefractedChain faces
+// or none.
 std::optional<SpecularChain> specular_seed_chain(const Scene& scene, const Vec3& x, const Vec3& d, const Vec3& y,
                                                  bool to_infinity, float lambda_nm, bool reflect_too, Rng& rng);
 // One random seed: a direction from x (half in the 30° cone around the straight

@@ -347,18 +347,3 @@ TEST(GeometryScene, SurfacePatchReproducesHits) {
   for (const Vec3& n : patch->n) expect_near(n, patch->ng, 0.f);
   EXPECT_TRUE(scene.flat_face(box, hit->prim_id));
 }
-
-TEST(GeometryScene, FlatShapesAreBoxesAndMeshesOfFlatFaces) {
-  GeometryScene scene;
-  const int smooth = scene.add_mesh(make_uv_sphere(Vec3(0.f), 1.f, 12, 24));
-  TriangleMesh faceted = make_uv_sphere(Vec3(5.f, 0.f, 0.f), 1.f, 12, 24);
-  faceted.normals.clear();  // flat-shaded: each triangle its own plane
-  const int flat_mesh = scene.add_mesh(std::move(faceted));
-  const int box = scene.add_box(Bounds3{Vec3(2.f, -1.f, -1.f), Vec3(3.f, 1.f, 1.f)});
-  const int sphere = scene.add_sphere(Vec3(-4.f, 0.f, 0.f), 1.f);
-  scene.commit();
-  EXPECT_FALSE(scene.flat_shape(smooth));
-  EXPECT_TRUE(scene.flat_shape(flat_mesh));
-  EXPECT_TRUE(scene.flat_shape(box));
-  EXPECT_FALSE(scene.flat_shape(sphere));
-}

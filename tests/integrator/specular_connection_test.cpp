@@ -476,49 +476,6 @@ TEST(SpecularConnection, PartitionNearTheCuvettesFloorCountsEachPathOnce) {
   expect_partition(p, 0.2);
 }
 
-// Beside the cuvette's front wall (z = 2 cm), light from the panel also comes
-// piped through the glass: in through the left wall, into the front wall's
-// glass, totally reflected at its outer face, back across the liquid, out
-// through the left wall; with more reflections in the wall, more faces.
-const Vec3 kBesideTheFrontWall(0.01f, 0.03f, 0.018f);
-
-TEST(SpecularConnection, PipedPathsAreWalkedSolvedAndShared) {
-  // Seeds walk the cuvette's glass as it scatters: some return a path of more
-  // than four faces from kBesideTheFrontWall to the panel, which the solver
-  // solves, and a continuation that walked it finds it as the seeds' (so the
-  // two strategies share it: seed_reachable_solution).
-  const Scene scene = load_scene(write_scene("connect_piped", cuvette_scene()));
-  const Vec3 y(-0.14f, 0.04f, 0.01f);  // on the panel
-  Rng rng(test_seed(5), 0);
-  int piped = 0, shared = 0, longest = 0;
-  for (int i = 0; i < 400000 && piped < 20; ++i) {
-    const auto path = solve_from_random_seed(scene, kBesideTheFrontWall, y, false, kLambda, true, rng);
-    if (!path || path->count <= kMaxRefractedChain) continue;
-    ++piped;
-    longest = std::max(longest, path->count);
-    SpecularChain walked;
-    for (int j = 0; j < path->count; ++j)
-      ASSERT_TRUE(extend_chain(scene, path->face[size_t(j)], kMaxMirroredChain, &walked));
-    const auto found = seed_reachable_solution(scene, kBesideTheFrontWall, y, walked, kLambda);
-    if (found && found->count == path->count) ++shared;
-  }
-  EXPECT_GE(piped, 5) << "paths of more than four faces";
-  EXPECT_EQ(shared, piped);
-  EXPECT_GT(longest, 5) << "more than the mirror chains' five faces";
-}
-
-TEST(SpecularConnection, PartitionBesideTheCuvettesWallCountsPipedPathsOnce) {
-  // As PartitionWithContinuationsCountsEachPathOnce, beside the front wall,
-  // where paths of six and seven faces (the seeds' alone) hold ≈ 5 % of the
-  // connection's fluence. Measured: all continuations 1.348 ± 0.005 against
-  // 0.135 left + 1.215 connection; continuations keeping their walks of more
-  // than four faces whole (a double count) read 0.160 + 1.214, 4.8σ off; seeds
-  // of at most four faces leave them 11.9 % of the fluence instead of 10.0 %.
-  const Scene scene = load_scene(write_scene("connect_piped_partition", cuvette_scene()));
-  const PartitionEstimates p = partition_estimates(scene, kBesideTheFrontWall, 6400000, 1600000, 53);
-  expect_partition(p, 0.11);
-}
-
 // A tank of solution behind one glass surface (index 1.5 inside), a panel
 // above it reaching past its right wall. Near that wall the point sees the
 // panel twice: through the top, and mirrored in the wall by total internal
@@ -562,39 +519,6 @@ const std::string kFlaskPanel = R"(,
     {"type": "quad", "corner": [0.3, -0.1, 0.1], "edge_u": [0, 0.2, 0], "edge_v": [0, 0, -0.2],
      "emission": {"spectrum": {"gaussian": [420, 8]}, "scale": 5}}])";
 const Vec3 kInFlask(0.012f, 0.007f, -0.004f);
-
-TEST(SpecularConnection, ChainsPastTheirLimitsAreFlat) {
-  // A chain takes faces up to its limit (kMaxRefractedChain for the seeds,
-  // kMaxMirroredChain for the walls as mirrors and the walks) on any glass and,
-  // while they all lie on shapes of flat faces, up to kMaxSpecularChain.
-  const Scene cuvette = load_scene(write_scene("chain_rule_cuvette", cuvette_scene()));
-  const auto wall = straight_line_chain(cuvette, kUnderLid, Vec3(-0.14f, 0.05f, 0.f), false);
-  ASSERT_TRUE(wall && wall->count == 2);
-  const Scene flask = load_scene(write_scene("chain_rule_flask", flask_scene(kFlaskPanel)));
-  const auto curved = straight_line_chain(flask, kInFlask, Vec3(0.3f, 0.f, 0.f), false);
-  ASSERT_TRUE(curved && curved->count == 2);
-  ASSERT_FALSE(flask.geometry.flat_shape(curved->faces[0].shape_id));
-  for (const int limit : {kMaxRefractedChain, kMaxMirroredChain}) {
-    SpecularChain flat;
-    for (int j = 0; j < kMaxSpecularChain; ++j)
-      EXPECT_TRUE(extend_chain(cuvette, wall->faces[j % 2], limit, &flat)) << limit << ", face " << j;
-    EXPECT_FALSE(extend_chain(cuvette, wall->faces[0], limit, &flat));
-    EXPECT_EQ(flat.count, kMaxSpecularChain);
-    EXPECT_TRUE(flat.flat_shapes);
-
-    SpecularChain smooth;
-    for (int j = 0; j < limit; ++j)
-      EXPECT_TRUE(extend_chain(flask, curved->faces[j % 2], limit, &smooth)) << limit << ", face " << j;
-    EXPECT_FALSE(extend_chain(flask, curved->faces[0], limit, &smooth));
-    EXPECT_EQ(smooth.count, limit);
-    EXPECT_FALSE(smooth.flat_shapes);
-
-    SpecularChain mixed;
-    for (int j = 0; j < limit; ++j) EXPECT_TRUE(extend_chain(cuvette, wall->faces[j % 2], limit, &mixed));
-    EXPECT_FALSE(extend_chain(flask, curved->faces[0], limit, &mixed)) << limit << ": a curved face past the limit";
-    EXPECT_TRUE(extend_chain(cuvette, wall->faces[0], limit, &mixed));
-  }
-}
 
 TEST(SpecularManifold, AgreesWithThePlanarClosedForm) {
   // The general solver on a chain of two parallel box faces: the same vertices
