@@ -164,6 +164,50 @@ void check_ply_header(const std::filesystem::path& file, const std::string& name
   throw InputError(name, "", "", fmt::format("the PLY header has no end_header line within {} lines", kMaxHeaderLines));
 }
 
+// Assimp 5.2's binary glTF readers allocate what a chunk header declares before
+// reading it: a 57-byte GLB whose JSON chunk declared 0xF70002AB bytes asked for
+// 4.1 GB (fuzz/crashes/mesh/glb-json-chunk-length-*). So a file starting with the
+// binary glTF magic (which Assimp accepts whatever the extension) is checked first:
+// the declared total length and every chunk must fit in the file. Version 1 has one
+// content block of declared length after a 20-byte header; version 2 a 12-byte
+// header and then chunks, each an 8-byte header (length, type) and its data.
+void check_glb_header(const std::filesystem::path& file, const std::string& name) {
+  std::ifstream in(file, std::ios::binary);
+  std::array<unsigned char, 20> header{};
+  in.read(reinterpret_cast<char*>(header.data()), 12);
+  if (in.gcount() < 4 || std::memcmp(header.data(), "glTF", 4) != 0) return;  // not a binary glTF file
+  const uint64_t size = std::filesystem::file_size(file);
+  const auto u32 = [](const unsigned char* b) {  // GLB is little-endian whatever the host
+    return uint32_t(b[0]) | uint32_t(b[1]) << 8 | uint32_t(b[2]) << 16 | uint32_t(b[3]) << 24;
+  };
+  const auto refuse = [&](const std::string& key, uint64_t value, uint64_t offset) {
+    return InputError(name, key, fmt::format("{}", value),
+                      fmt::format("declares more bytes than the {} left in the {}-byte file after offset {} "
+                                  "(truncated or corrupt binary glTF)",
+                                  size - std::min(size, offset), size, offset));
+  };
+  if (in.gcount() < 12) throw InputError(name, "", "", "the binary glTF header is shorter than 12 bytes");
+  const uint32_t version = u32(&header[4]), length = u32(&header[8]);
+  if (length > size) throw refuse("GLB length", length, 0);
+  if (version == 1) {
+    in.read(reinterpret_cast<char*>(&header[12]), 8);
+    if (in.gcount() < 8) throw InputError(name, "", "", "the binary glTF 1 header is shorter than 20 bytes");
+    if (const uint32_t content = u32(&header[12]); content > size - 20) throw refuse("GLB content length", content, 20);
+    return;
+  }
+  uint64_t offset = 12;
+  for (int chunk = 0; offset + 8 <= size; ++chunk) {
+    std::array<unsigned char, 8> chunk_header{};
+    in.seekg(std::streamoff(offset));
+    in.read(reinterpret_cast<char*>(chunk_header.data()), 8);
+    if (in.gcount() < 8) break;
+    const uint32_t chunk_length = u32(chunk_header.data());
+    if (chunk_length > size - offset - 8)
+      throw refuse(fmt::format("GLB chunk {} length", chunk), chunk_length, offset + 8);
+    offset += 8 + uint64_t(chunk_length);
+  }
+}
+
 }  // namespace
 
 TriangleMesh load_mesh(const std::filesystem::path& file, MeshLoadInfo* info) {
@@ -172,6 +216,7 @@ TriangleMesh load_mesh(const std::filesystem::path& file, MeshLoadInfo* info) {
   if (!std::filesystem::is_regular_file(file, ec)) throw InputError(name, "", "", "mesh file not found or not a file");
 
   check_ply_header(file, name);
+  check_glb_header(file, name);
 
   Assimp::Importer importer;
   // Points and lines cannot bound anything: drop them instead of failing.

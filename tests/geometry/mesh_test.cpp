@@ -1,14 +1,16 @@
+#include "geometry/mesh.h"
+
 #include <gtest/gtest.h>
+#include <unistd.h>
 
 #include <cmath>
+#include <cstring>
 #include <filesystem>
 #include <fstream>
 #include <string>
-#include <unistd.h>
 
 #include "core/constants.h"
 #include "core/error.h"
-#include "geometry/mesh.h"
 
 using namespace chlorovdb;
 namespace fs = std::filesystem;
@@ -211,6 +213,69 @@ TEST(MeshLoad, GltfNodesAreMergedWithTheirTransforms) {
   EXPECT_FLOAT_EQ(z_min, -5.f);
   EXPECT_FLOAT_EQ(z_max, 5.f);
   EXPECT_FLOAT_EQ(mesh_area(m), 1.f);
+}
+
+namespace {
+
+void put_u32(std::string& s, size_t at, uint32_t v) {
+  for (int i = 0; i < 4; ++i) s[at + i] = char((v >> (8 * i)) & 0xffu);
+}
+
+// A GLB (binary glTF 2) holding one triangle: a JSON chunk, then a BIN chunk with
+// 3 float3 positions and 3 uint16 indices.
+std::string glb_triangle() {
+  std::string json =
+      R"({"asset":{"version":"2.0"},"scene":0,"scenes":[{"nodes":[0]}],"nodes":[{"mesh":0}],)"
+      R"("meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1}]}],)"
+      R"("buffers":[{"byteLength":44}],)"
+      R"("bufferViews":[{"buffer":0,"byteOffset":0,"byteLength":36},{"buffer":0,"byteOffset":36,"byteLength":6}],)"
+      R"("accessors":[{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3","min":[0,0,0],"max":[1,1,0]},)"
+      R"({"bufferView":1,"componentType":5123,"count":3,"type":"SCALAR"}]})";
+  json.resize((json.size() + 3) / 4 * 4, ' ');
+  std::string bin(44, '\0');
+  const float positions[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  std::memcpy(bin.data(), positions, sizeof positions);
+  const uint16_t indices[3] = {0, 1, 2};
+  std::memcpy(bin.data() + 36, indices, sizeof indices);
+  std::string glb(12, '\0');
+  glb.replace(0, 4, "glTF");
+  put_u32(glb, 4, 2);
+  for (const auto& [type, data] : {std::pair<const char*, const std::string&>{"JSON", json}, {"BIN\0", bin}}) {
+    std::string chunk(8, '\0');
+    put_u32(chunk, 0, uint32_t(data.size()));
+    chunk.replace(4, 4, type, 4);
+    glb += chunk + data;
+  }
+  put_u32(glb, 8, uint32_t(glb.size()));
+  return glb;
+}
+
+}  // namespace
+
+// Assimp 5.2 allocates a GLB chunk's declared length before reading it (a 57-byte file
+// asked for 4.1 GB: fuzz/crashes/mesh/glb-json-chunk-length-*), so load_mesh checks
+// the binary header against the file's size first.
+TEST(MeshLoad, GlbLengthsBeyondTheFileAreRefused) {
+  const std::string good = glb_triangle();
+  const TempFile well_formed("triangle.glb", good);
+  EXPECT_EQ(load_mesh(well_formed.path()).triangle_count(), 1);
+  std::string json_chunk = good;
+  put_u32(json_chunk, 12, 0xF70002ABu);
+  const TempFile huge("huge_chunk.glb", json_chunk);
+  std::string msg = expect_input_error(huge.path());
+  EXPECT_NE(msg.find(huge.path().string()), std::string::npos) << msg;
+  EXPECT_NE(msg.find("GLB chunk 0 length = 4143973035"), std::string::npos) << msg;
+  std::string bin_chunk = good;
+  put_u32(bin_chunk, 20 + (good.size() - 20 - 44 - 8), 45);  // the BIN chunk one byte longer than its data
+  const TempFile cut("cut_bin.glb", bin_chunk);
+  msg = expect_input_error(cut.path());
+  EXPECT_NE(msg.find("GLB chunk 1 length = 45"), std::string::npos) << msg;
+  const TempFile truncated("truncated.glb", good.substr(0, good.size() - 4));
+  msg = expect_input_error(truncated.path());
+  EXPECT_NE(msg.find("GLB length = " + std::to_string(good.size())), std::string::npos) << msg;
+  // The magic decides, not the extension: the same bytes named .gltf are checked too.
+  const TempFile renamed("huge_chunk.gltf", json_chunk);
+  EXPECT_NE(expect_input_error(renamed.path()).find("GLB chunk 0 length"), std::string::npos);
 }
 
 TEST(MeshLoad, MissingFileNamesTheFile) {
