@@ -82,8 +82,7 @@ float continuation_weight_against_connection(const Scene& scene, const Continuat
       1, connection_path_density(origin, light_index, lambda_nm, pdf_solid_angle, seeded), 1,
       continuation_path_density(scene, origin, path->dir[0], lambda_nm, path_fresnel(scene, *path, lambda_nm)));
   if (!seeded) return 1.f - w;
-  const bool seeds_missed = rng.uniform() < w && seeds_miss(scene, origin.x, y, *path, lambda_nm, rng);
-  return seeds_missed ? 2.f - w : 1.f - w;
+  return seeds_miss(scene, origin.x, y, *path, lambda_nm, rng) ? 1.f : 1.f - w;
 }
 
 }  // namespace chlorovdb
