@@ -416,34 +416,82 @@ Fog mesh_to_fog(const TriangleMesh& mesh, const VoxelizeOptions& o, const Profil
   return fog;
 }
 
-// Height field spill: the layer y0 <= y <= y0 + depth · sample(x, z), bilinear between samples
-// `cell` metres apart, sample (0, 0) at `origin`. Exact coverage along y; the footprint is point
+// The voxel columns of a height field spill: the layer y0 <= y <= y0 + depth · sample(x, z),
+// bilinear between samples `cell` metres apart, sample (0, 0) at `origin`, over the voxel
+// centres (i h.x, k h.z) inside the samples' footprint. Column (i, k) spans voxels j_lo .. j_hi(top).
+struct HeightFieldColumns {
+  const HeightField& f;
+  Vec3d origin;
+  double cell, depth;
+  Vec3d h;
+  int i0, i1, k0, k1, j_lo;
+  HeightFieldColumns(const HeightField& field, const Vec3& o, float cell_size, const VoxelizeOptions& options)
+      : f(field), origin(o.x, o.y, o.z), cell(cell_size), depth(options.depth), h(Lattice(options.voxel_size).h) {
+    const double x_hi = origin.x() + cell * (f.nx - 1), z_hi = origin.z() + cell * (f.nz - 1);
+    i0 = int(std::ceil(origin.x() / h.x())), i1 = int(std::floor(x_hi / h.x()));
+    k0 = int(std::ceil(origin.z() / h.z())), k1 = int(std::floor(z_hi / h.z()));
+    j_lo = int(std::floor(origin.y() / h.y() - 0.5));
+  }
+  // World y of the layer's top over column (i, k).
+  double top(int i, int k) const {
+    const double s = std::clamp((i * h.x() - origin.x()) / cell, 0.0, double(f.nx - 1));
+    const double t = std::clamp((k * h.z() - origin.z()) / cell, 0.0, double(f.nz - 1));
+    const int si = std::min(int(s), f.nx - 2), ti = std::min(int(t), f.nz - 2);
+    const double fs = s - si, ft = t - ti;
+    const double sample = (1 - ft) * ((1 - fs) * f.at(si, ti) + fs * f.at(si + 1, ti)) +
+                          ft * ((1 - fs) * f.at(si, ti + 1) + fs * f.at(si + 1, ti + 1));
+    return origin.y() + sample * depth;
+  }
+  int j_hi(double top) const { return int(std::ceil(top / h.y() + 0.5)); }
+};
+
+// Bytes of the tree height_field_to_fog builds. Every column starts at j_lo, so a node of
+// OpenVDB's tree (leaf 8^3 voxels, internal nodes 128^3 and 4096^3) over a set of columns
+// stacks from j_lo up to the tallest of them. Counting voxels alone misjudged spikes: a leaf
+// over a one-column spike stores 8 voxels of its 512 and an internal node 128 of 2 million
+// (a 3 x 2-sample field with one sample of 5e5 needed 1e6 voxels, was estimated at 10 MB
+// and took 1.7 GB: fuzz/crashes/mesh/hf-one-tall-sample-*).
+double height_field_tree_bytes(const HeightFieldColumns& c) {
+  using Leaf = FloatTree::LeafNodeType;
+  using Lower = FloatTree::RootNodeType::ChildNodeType::ChildNodeType;
+  using Upper = FloatTree::RootNodeType::ChildNodeType;
+  const std::array<int, 3> log2_dim{int(Leaf::TOTAL), int(Lower::TOTAL), int(Upper::TOTAL)};
+  const std::array<double, 3> node_bytes{double(sizeof(Leaf) + sizeof(float) * Leaf::SIZE), double(sizeof(Lower)),
+                                         double(sizeof(Upper))};
+  double bytes = 0;
+  for (int level = 0; level < 3; ++level) {
+    const int d = log2_dim[size_t(level)];  // >> on a negative int floors (C++20)
+    const int ni = (c.i1 >> d) - (c.i0 >> d) + 1, nk = (c.k1 >> d) - (c.k0 >> d) + 1;
+    std::vector<int> tallest(size_t(ni) * size_t(nk), std::numeric_limits<int>::min());
+    for (int k = c.k0; k <= c.k1; ++k)
+      for (int i = c.i0; i <= c.i1; ++i)
+        if (const double top = c.top(i, k); top > c.origin.y()) {
+          int& t = tallest[size_t((i >> d) - (c.i0 >> d)) + size_t(ni) * size_t((k >> d) - (c.k0 >> d))];
+          t = std::max(t, c.j_hi(top));
+        }
+    for (const int j : tallest)
+      if (j != std::numeric_limits<int>::min())
+        bytes += double((j >> d) - (c.j_lo >> d) + 1) * node_bytes[size_t(level)];
+  }
+  return bytes;
+}
+
+// Height field spill over HeightFieldColumns: exact coverage along y; the footprint is point
 // sampled at voxel centres in x and z (its edge is where the depth goes to 0, so it is soft already).
 // The depth of a point is its vertical distance to the nearer of the floor and the liquid's top.
-Fog height_field_to_fog(const HeightField& f, const Vec3& origin, float cell, const VoxelizeOptions& o,
-                        const ProfileSampler& profile) {
+Fog height_field_to_fog(const HeightFieldColumns& c, const VoxelizeOptions& o, const ProfileSampler& profile) {
   const Lattice lattice(o.voxel_size);
   const Vec3d h = lattice.h;
   auto tree = std::make_shared<FloatTree>(0.f);
   openvdb::tree::ValueAccessor<FloatTree> acc(*tree);
-  const double x_hi = origin.x + double(cell) * (f.nx - 1), z_hi = origin.z + double(cell) * (f.nz - 1);
-  const int i0 = int(std::ceil(origin.x / h.x())), i1 = int(std::floor(x_hi / h.x()));
-  const int k0 = int(std::ceil(origin.z / h.z())), k1 = int(std::floor(z_hi / h.z()));
   Fog fog;
-  const double y0 = origin.y;
-  for (int k = k0; k <= k1; ++k)
-    for (int i = i0; i <= i1; ++i) {
+  const double y0 = c.origin.y();
+  for (int k = c.k0; k <= c.k1; ++k)
+    for (int i = c.i0; i <= c.i1; ++i) {
       const double x = i * h.x(), z = k * h.z();
-      const double s = std::clamp((x - origin.x) / cell, 0.0, double(f.nx - 1));
-      const double t = std::clamp((z - origin.z) / cell, 0.0, double(f.nz - 1));
-      const int si = std::min(int(s), f.nx - 2), ti = std::min(int(t), f.nz - 2);
-      const double fs = s - si, ft = t - ti;
-      const double sample = (1 - ft) * ((1 - fs) * f.at(si, ti) + fs * f.at(si + 1, ti)) +
-                            ft * ((1 - fs) * f.at(si, ti + 1) + fs * f.at(si + 1, ti + 1));
-      const double top = y0 + sample * o.depth;
+      const double top = c.top(i, k);
       if (!(top > y0)) continue;
-      const int j0 = int(std::floor(y0 / h.y() - 0.5)), j1 = int(std::ceil(top / h.y() + 0.5));
-      for (int j = j0; j <= j1; ++j) {
+      for (int j = c.j_lo, j1 = c.j_hi(top); j <= j1; ++j) {
         const double y = j * h.y();
         const double coverage =
             std::clamp((std::min(y + 0.5 * h.y(), top) - std::max(y - 0.5 * h.y(), y0)) / h.y(), 0.0, 1.0);
@@ -608,12 +656,15 @@ VoxelizeReport voxelize_height_field(const HeightField& f, const VoxelizeOptions
   e.body_voxels = sum * double(cell) * cell * o.depth / (double(h.x) * h.y * h.z) + 2.0 * columns;
   e.stored_voxels = e.body_voxels;
   e.band_voxels = 0;
-  e.bytes = 1.25 * 2.0 * 4.0 * e.body_voxels;  // one float per voxel, leaves half filled at worst
+  e.bytes = 4.0 * e.body_voxels;  // the values alone: refuses the hopeless before visiting every column
   e.available_bytes = o.memory_limit_bytes > 0 ? o.memory_limit_bytes : available_memory_bytes();
   check_estimate(e, o);
   check_voxel_volume(o);
+  const HeightFieldColumns field_columns(f, origin, cell, o);
+  e.bytes = 1.25 * height_field_tree_bytes(field_columns);  // the tree's nodes, 25 % over for writing it
+  check_estimate(e, o);
 
-  Fog fog = height_field_to_fog(f, origin, cell, o, profile);
+  Fog fog = height_field_to_fog(field_columns, o, profile);
   return finish(std::move(fog), o, e, provenance_of(o, profile, fmt::format("{} ({}x{} samples)", source, f.nx, f.nz)),
                 output);
 }

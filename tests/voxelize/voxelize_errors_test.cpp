@@ -117,6 +117,30 @@ TEST(VoxelizeErrors, MemoryOverTheLimitIsRefused) {
   EXPECT_GT(available_memory_bytes(), 0);
 }
 
+// A height field's memory is its tree's nodes, not its voxels: a one-column spike fills 8
+// voxels of each 512-voxel leaf and 128 of each internal node it passes through. The spike
+// (1e4 voxels, 7.7 MB with the nodes) was estimated at 0.1 MB and built; a broad puddle of
+// twice the voxels (1.7 MB) fits the same 4 MB.
+TEST(VoxelizeErrors, TallThinHeightFieldIsRefusedByItsTreeMemory) {
+  VoxelizeOptions o = options_with(VoxelizeMode::spill, Vec3(0.001f));
+  o.depth = 0.002f;
+  o.memory_limit_bytes = 4 << 20;
+  const auto spike = temp_path("spike.hf"), puddle = temp_path("broad.hf");
+  std::ofstream(spike) << "1 5000 1\n0 0 0\n";
+  {
+    std::ofstream out(puddle);
+    for (int j = 0; j < 101; ++j)
+      for (int i = 0; i < 101; ++i) out << "1" << (i == 100 ? '\n' : ' ');
+  }
+  const std::string e = error_of([&] { voxelize_file(spike, o, temp_path("never.vdb")); });
+  EXPECT_TRUE(contains(e, "more memory than is available")) << e;
+  EXPECT_TRUE(contains(e, "spike.hf")) << e;
+  o.depth = 0.001f;
+  const VoxelizeReport r = voxelize_file(puddle, o, temp_path("broad.vdb"));
+  EXPECT_GT(r.active_voxels, 20000);
+  EXPECT_LT(r.estimate.bytes, 4 << 20);
+}
+
 TEST(VoxelizeErrors, ModeParameters) {
   const TriangleMesh quad = make_quad({0, 0, 0}, {0.1f, 0, 0}, {0, 0, -0.1f});
   EXPECT_TRUE(contains(error_of([&] {
