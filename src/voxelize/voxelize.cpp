@@ -2,13 +2,6 @@
 // mesh -> narrow band (meshToVolume) -> world-space distances -> fog grid -> .vdb.
 #include "voxelize/voxelize.h"
 
-#include <algorithm>
-#include <array>
-#include <cmath>
-#include <limits>
-#include <map>
-#include <mutex>
-
 #include <fmt/format.h>
 #include <openvdb/io/File.h>
 #include <openvdb/openvdb.h>
@@ -18,6 +11,14 @@
 #include <tbb/blocked_range.h>
 #include <tbb/combinable.h>
 #include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <mutex>
+#include <unordered_set>
 
 #include "core/error.h"
 
@@ -416,6 +417,90 @@ Fog mesh_to_fog(const TriangleMesh& mesh, const VoxelizeOptions& o, const Profil
   return fog;
 }
 
+// Sizes of OpenVDB's tree nodes (a float leaf with its value buffer, the 16^3- and 32^3-child
+// internal nodes) and the log2 of the voxels each spans per axis: the memory estimates count nodes.
+using LowerNode = FloatTree::RootNodeType::ChildNodeType::ChildNodeType;
+using UpperNode = FloatTree::RootNodeType::ChildNodeType;
+constexpr openvdb::Index kLeafLog2 = FloatTree::LeafNodeType::TOTAL, kLowerLog2 = LowerNode::TOTAL,
+                         kUpperLog2 = UpperNode::TOTAL;
+constexpr double kFloatLeafBytes =
+    double(sizeof(FloatTree::LeafNodeType) + sizeof(float) * FloatTree::LeafNodeType::SIZE);
+constexpr double kLowerBytes = double(sizeof(LowerNode)), kUpperBytes = double(sizeof(UpperNode));
+
+// The leaves (8^3 voxels, keyed by their origin) within `reach` index voxels of the triangle
+// (a, b, c) (index space), into `leaves` until it holds `max_leaves`: the triangle is halved
+// across its longest edge (slivers, a needle's sides, split along their length only) until that
+// edge is at most a leaf or `reach` long; then the leaves of its bounding box grown by `reach`
+// that lie within `reach` of its plane are marked. A superset of the leaves meshToVolume's band
+// touches.
+void collect_band_leaves(const openvdb::Vec3d& a, const openvdb::Vec3d& b, const openvdb::Vec3d& c, double reach,
+                         std::unordered_set<openvdb::Coord>& leaves, size_t max_leaves) {
+  if (leaves.size() >= max_leaves) return;
+  const double leaf = double(1 << kLeafLog2);
+  const double ab = (b - a).lengthSqr(), bc = (c - b).lengthSqr(), ca = (a - c).lengthSqr();
+  if (const double longest = std::max({ab, bc, ca}); longest > std::max(leaf, reach) * std::max(leaf, reach)) {
+    if (ab == longest) {
+      collect_band_leaves(a, 0.5 * (a + b), c, reach, leaves, max_leaves);
+      collect_band_leaves(0.5 * (a + b), b, c, reach, leaves, max_leaves);
+    } else if (bc == longest) {
+      collect_band_leaves(a, b, 0.5 * (b + c), reach, leaves, max_leaves);
+      collect_band_leaves(a, 0.5 * (b + c), c, reach, leaves, max_leaves);
+    } else {
+      collect_band_leaves(a, b, 0.5 * (c + a), reach, leaves, max_leaves);
+      collect_band_leaves(0.5 * (c + a), b, c, reach, leaves, max_leaves);
+    }
+    return;
+  }
+  openvdb::Coord lo, hi;
+  for (int axis = 0; axis < 3; ++axis) {
+    lo[axis] = int(std::floor((std::min({a[axis], b[axis], c[axis]}) - reach) / leaf));
+    hi[axis] = int(std::floor((std::max({a[axis], b[axis], c[axis]}) + reach) / leaf));
+  }
+  // The plane's distance to a leaf's box: that to its centre less the box's half extent along the normal.
+  openvdb::Vec3d n = (b - a).cross(c - a);
+  const double n_length = n.length();
+  n = n_length > 0.0 ? n / n_length : openvdb::Vec3d(0.0);
+  const double half_extent = 0.5 * leaf * (std::abs(n.x()) + std::abs(n.y()) + std::abs(n.z()));
+  for (int x = lo.x(); x <= hi.x(); ++x)
+    for (int y = lo.y(); y <= hi.y(); ++y)
+      for (int z = lo.z(); z <= hi.z(); ++z) {
+        const openvdb::Vec3d centre = leaf * openvdb::Vec3d(x + 0.5, y + 0.5, z + 0.5);
+        if (std::abs(n.dot(centre - a)) - half_extent <= reach) leaves.insert(openvdb::Coord(x, y, z) << kLeafLog2);
+      }
+}
+
+// Bytes of mesh_to_fog's trees, counted by node: the leaves the band touches hold meshToVolume's
+// distance (float) and closest triangle (int32, the same size), about as much again in its
+// per-thread voxelization data, and the fog's float (at least `stored_voxels` of them); each of
+// those four trees has the internal nodes over the band's leaves. Counting stops past
+// `limit_bytes` (> 0; the caller refuses then).
+double mesh_tree_bytes(const TriangleMesh& mesh, const VoxelizeOptions& o, const detail::BandWidths& band,
+                       double stored_voxels, double limit_bytes) {
+  const Vec3 h = o.voxel_size;
+  const double reach = double(std::max(band.exterior, band.interior)) + 1.0;
+  constexpr double kTrees = 4.0;
+  const double per_leaf = kTrees * kFloatLeafBytes;
+  const size_t max_leaves = limit_bytes > 0 ? size_t(std::min(limit_bytes / per_leaf + 1.0, 1e9)) : size_t(1e9);
+  std::unordered_set<openvdb::Coord> leaves;
+  for (int t = 0; t < mesh.triangle_count() && leaves.size() < max_leaves; ++t) {
+    std::array<openvdb::Vec3d, 3> v;
+    for (int k = 0; k < 3; ++k) {
+      const Vec3& p = mesh.positions[mesh.indices[3 * t + k]];
+      v[size_t(k)] = {double(p.x) / h.x, double(p.y) / h.y, double(p.z) / h.z};
+    }
+    collect_band_leaves(v[0], v[1], v[2], reach, leaves, max_leaves);
+  }
+  std::unordered_set<openvdb::Coord> lower, upper;
+  for (const openvdb::Coord& l : leaves) {
+    lower.insert(l >> kLowerLog2);
+    upper.insert(l >> kUpperLog2);
+  }
+  const double band_voxels = double(leaves.size()) * double(FloatTree::LeafNodeType::SIZE);
+  const double fog_beyond_band = std::max(0.0, stored_voxels - band_voxels) * sizeof(float);
+  return double(leaves.size()) * per_leaf + fog_beyond_band +
+         kTrees * (double(lower.size()) * kLowerBytes + double(upper.size()) * kUpperBytes);
+}
+
 // The voxel columns of a height field spill: the layer y0 <= y <= y0 + depth · sample(x, z),
 // bilinear between samples `cell` metres apart, sample (0, 0) at `origin`, over the voxel
 // centres (i h.x, k h.z) inside the samples' footprint. Column (i, k) spans voxels j_lo .. j_hi(top).
@@ -452,12 +537,8 @@ struct HeightFieldColumns {
 // (a 3 x 2-sample field with one sample of 5e5 needed 1e6 voxels, was estimated at 10 MB
 // and took 1.7 GB: fuzz/crashes/mesh/hf-one-tall-sample-*).
 double height_field_tree_bytes(const HeightFieldColumns& c) {
-  using Leaf = FloatTree::LeafNodeType;
-  using Lower = FloatTree::RootNodeType::ChildNodeType::ChildNodeType;
-  using Upper = FloatTree::RootNodeType::ChildNodeType;
-  const std::array<int, 3> log2_dim{int(Leaf::TOTAL), int(Lower::TOTAL), int(Upper::TOTAL)};
-  const std::array<double, 3> node_bytes{double(sizeof(Leaf) + sizeof(float) * Leaf::SIZE), double(sizeof(Lower)),
-                                         double(sizeof(Upper))};
+  const std::array<int, 3> log2_dim{int(kLeafLog2), int(kLowerLog2), int(kUpperLog2)};
+  const std::array<double, 3> node_bytes{kFloatLeafBytes, kLowerBytes, kUpperBytes};
   double bytes = 0;
   for (int level = 0; level < 3; ++level) {
     const int d = log2_dim[size_t(level)];  // >> on a negative int floors (C++20)
@@ -612,9 +693,14 @@ VoxelizeReport voxelize_mesh(const TriangleMesh& input, const VoxelizeOptions& o
     body.hi += Vec3(0.5f * o.thickness);
   }
   const ProfileSampler profile(o.profile, body, o.unit, source);
-  const VoxelEstimate estimate = estimate_voxels(mesh, o, profile);
-  check_estimate(estimate, o);
+  VoxelEstimate estimate = estimate_voxels(mesh, o, profile);
+  check_estimate(estimate, o);  // refuses the hopeless before visiting every triangle
   check_voxel_volume(o);
+  const double limit = estimate.available_bytes > 0 ? double(estimate.available_bytes) : 0.0;
+  estimate.bytes =
+      std::max(estimate.bytes, 1.25 * mesh_tree_bytes(mesh, o, detail::band_widths(o, profile.depth_range()),
+                                                      estimate.stored_voxels, limit / 1.25));
+  check_estimate(estimate, o);
 
   Fog fog = mesh_to_fog(mesh, o, profile);
   const std::string provenance =

@@ -141,6 +141,22 @@ TEST(VoxelizeErrors, TallThinHeightFieldIsRefusedByItsTreeMemory) {
   EXPECT_LT(r.estimate.bytes, 4 << 20);
 }
 
+// A mesh's memory is counted from the tree nodes its band touches: a needle one voxel wide
+// (1 x 1 x 6000 voxels) needs 4 leaves and their internal nodes per 8 voxels of length. The
+// band's area alone estimated it at 7 MB (a needle of 20 000 voxels: 22.9 MB estimated, 235 MB
+// used); a sphere of 30 voxels' radius fits the same 32 MB.
+TEST(VoxelizeErrors, ThinMeshIsRefusedByItsTreeMemory) {
+  VoxelizeOptions o = options_with(VoxelizeMode::solid, Vec3(0.001f));
+  o.memory_limit_bytes = 32 << 20;
+  const std::string e = error_of([&] {
+    voxelize_mesh(make_box({{0, 0, 0}, {0.001f, 0.001f, 6.f}}), o, temp_path("never.vdb"));
+  });
+  EXPECT_TRUE(contains(e, "more memory than is available")) << e;
+  const VoxelizeReport r = voxelize_mesh(make_uv_sphere({0, 0, 0}, 0.03f, 32, 64), o, temp_path("sphere.vdb"));
+  EXPECT_GT(r.active_voxels, 100000);
+  EXPECT_LT(r.estimate.bytes, 32 << 20);
+}
+
 TEST(VoxelizeErrors, ModeParameters) {
   const TriangleMesh quad = make_quad({0, 0, 0}, {0.1f, 0, 0}, {0, 0, -0.1f});
   EXPECT_TRUE(contains(error_of([&] {
