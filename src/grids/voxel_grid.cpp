@@ -58,14 +58,12 @@ VoxelGrid VoxelGrid::from_bricks(Coord index_lo, Coord index_hi, float backgroun
     // count can exceed any integer type).
     double table_bytes = sizeof(uint32_t);
     for (int a = 0; a < 3; ++a) table_bytes *= (double(index_hi[a]) - double(index_lo[a]) + 3.0) / 8.0 + 1.0;
-    check_memory(table_bytes, fmt::format("the brick table of a {}x{}x{}-voxel bounding box",
-                                          int64_t(index_hi[0]) - index_lo[0] + 1, int64_t(index_hi[1]) - index_lo[1] + 1,
-                                          int64_t(index_hi[2]) - index_lo[2] + 1),
+    check_memory(table_bytes,
+                 fmt::format("the brick table of a {}x{}x{}-voxel bounding box", int64_t(index_hi[0]) - index_lo[0] + 1,
+                             int64_t(index_hi[1]) - index_lo[1] + 1, int64_t(index_hi[2]) - index_lo[2] + 1),
                  file, "grid", g.metadata_.name);
-    // Lookups run in float index space, exact to one voxel only within ±2^24.
-    constexpr int kMaxIndex = 1 << 24;
     for (int a = 0; a < 3; ++a)
-      if (index_lo[a] < -kMaxIndex || index_hi[a] > kMaxIndex)
+      if (index_lo[a] < -kMaxVoxelIndex || index_hi[a] > kMaxVoxelIndex)
         throw InputError(file, "grid", g.metadata_.name,
                          fmt::format("voxel indices [{}, {}] on axis {} exceed ±2^24: float lookups there would be "
                                      "off by whole voxels; re-centre the grid's index space",

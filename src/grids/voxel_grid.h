@@ -24,6 +24,10 @@
 
 namespace chlorovdb {
 
+// Lookups run in float index space, exact to one voxel only within ±2^24: grids with indices
+// beyond it are refused (VoxelGrid::from_bricks), and voxelize refuses to make them.
+inline constexpr int kMaxVoxelIndex = 1 << 24;
+
 enum class Interpolation { trilinear, nearest };
 
 // How far past the centres of the outermost stored voxels a lookup can still

@@ -693,13 +693,14 @@ VoxelizeReport voxelize_mesh(const TriangleMesh& input, const VoxelizeOptions& o
     body.hi += Vec3(0.5f * o.thickness);
   }
   const ProfileSampler profile(o.profile, body, o.unit, source);
+  const detail::BandWidths band = detail::band_widths(o, profile.depth_range());
+  check_index_range(body, double(std::max(band.exterior, band.interior)) + 1.0, o);
   VoxelEstimate estimate = estimate_voxels(mesh, o, profile);
   check_estimate(estimate, o);  // refuses the hopeless before visiting every triangle
   check_voxel_volume(o);
   const double limit = estimate.available_bytes > 0 ? double(estimate.available_bytes) : 0.0;
   estimate.bytes =
-      std::max(estimate.bytes, 1.25 * mesh_tree_bytes(mesh, o, detail::band_widths(o, profile.depth_range()),
-                                                      estimate.stored_voxels, limit / 1.25));
+      std::max(estimate.bytes, 1.25 * mesh_tree_bytes(mesh, o, band, estimate.stored_voxels, limit / 1.25));
   check_estimate(estimate, o);
 
   Fog fog = mesh_to_fog(mesh, o, profile);
@@ -735,6 +736,7 @@ VoxelizeReport voxelize_height_field(const HeightField& f, const VoxelizeOptions
   }
   const Bounds3 body{origin, origin + Vec3(cell * float(f.nx - 1), max_sample * o.depth, cell * float(f.nz - 1))};
   const ProfileSampler profile(o.profile, body, o.unit, source);
+  check_index_range(body, 1.0, o);
 
   VoxelEstimate e;
   const Vec3 h = o.voxel_size;

@@ -137,7 +137,10 @@ VoxelEstimate estimate_voxels(const TriangleMesh& world_mesh, const VoxelizeOpti
 // Throws InputError (naming options.source_name, the voxel size, the estimate and the memory
 // available) if the estimate exceeds kMaxVoxels or the memory available.
 void check_estimate(const VoxelEstimate& estimate, const VoxelizeOptions& options);
-// MemAvailable from /proc/meminfo in bytes; 0 if it cannot be read.
+// Throws InputError (naming options.source_name and the voxel size) if `world_body` grown by
+// `margin_voxels` reaches beyond ±kMaxVoxelIndex voxels from the origin on an axis: the
+// renderer refuses such grids, and the conversion's integer indices would overflow.
+void check_index_range(const Bounds3& world_body, double margin_voxels, const VoxelizeOptions& options);
 
 // Throws InputError for a voxel size that is not positive and finite, or mode parameters out of range.
 void validate_options(const VoxelizeOptions& options);

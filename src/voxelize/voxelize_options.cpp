@@ -1,11 +1,12 @@
 // Checking options, estimating cost and describing a conversion: the parts of
 // voxelize/ that need no OpenVDB (they compile in a second, voxelize.cpp does not).
+#include <fmt/format.h>
+
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <fstream>
 #include <sstream>
-
-#include <fmt/format.h>
 
 #include "core/error.h"
 #include "core/keyword.h"
@@ -159,6 +160,21 @@ VoxelEstimate estimate_voxels(const TriangleMesh& mesh, const VoxelizeOptions& o
   e.bytes = 1.25 * (band_leaf_voxels * 16.0 + std::max(e.stored_voxels, band_leaf_voxels) * 4.0);
   e.available_bytes = o.memory_limit_bytes > 0 ? o.memory_limit_bytes : available_memory_bytes();
   return e;
+}
+
+void check_index_range(const Bounds3& body, double margin_voxels, const VoxelizeOptions& o) {
+  const Vec3 h = o.voxel_size;
+  const std::array<double, 3> lo{body.lo.x / double(h.x), body.lo.y / double(h.y), body.lo.z / double(h.z)},
+      hi{body.hi.x / double(h.x), body.hi.y / double(h.y), body.hi.z / double(h.z)};
+  for (int a = 0; a < 3; ++a) {
+    const double reach = std::max(std::abs(lo[size_t(a)]), std::abs(hi[size_t(a)])) + margin_voxels;
+    if (!(reach <= kMaxVoxelIndex))
+      throw InputError(source_of(o), "--voxel-size", format_size(o.voxel_size),
+                       fmt::format("the object reaches {:.3g} voxels from the origin along {}: grids beyond ±2^24 "
+                                   "voxels are refused (float lookups there are off by whole voxels). Move it near "
+                                   "the origin (--translate) or use larger voxels",
+                                   reach, "xyz"[a]));
+  }
 }
 
 void check_estimate(const VoxelEstimate& e, const VoxelizeOptions& o) {

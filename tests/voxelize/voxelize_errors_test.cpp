@@ -157,6 +157,36 @@ TEST(VoxelizeErrors, ThinMeshIsRefusedByItsTreeMemory) {
   EXPECT_LT(r.estimate.bytes, 32 << 20);
 }
 
+// Grids beyond ±2^24 voxels from the origin are refused by the renderer (float lookups), and
+// the conversion's integer indices would overflow first (fuzz_mesh: a tetrahedron at x = 1e20
+// with voxels a sixth of its size: UBSan, float-to-int overflow).
+TEST(VoxelizeErrors, ObjectFarFromTheOriginIsRefused) {
+  VoxelizeOptions o = options_with(VoxelizeMode::shell, Vec3(0.001f));
+  o.thickness = 0.001f;
+  const std::string far_mesh = error_of([&] {
+    voxelize_mesh(make_quad({1e20f, 0, 0}, {1e15f, 0, 0}, {0, 0, 1e15f}), o, temp_path("never.vdb"));
+  });
+  EXPECT_TRUE(contains(far_mesh, "reaches 1e+23 voxels from the origin along x")) << far_mesh;
+  // The band's reach counts: a box ending 2 voxels short of 2^24 is refused, one 100 short is
+  // not (floats there are 2 voxels apart).
+  o.mode = VoxelizeMode::solid;
+  const float edge = float(1 << 24) * 0.001f;
+  EXPECT_TRUE(contains(
+      error_of([&] {
+        voxelize_mesh(make_box({{0, 0, edge - 0.01f}, {0.004f, 0.004f, edge - 0.002f}}), o, temp_path("never.vdb"));
+      }),
+      "along z"));
+  EXPECT_GT(voxelize_mesh(make_box({{0, 0, edge - 0.2f}, {0.004f, 0.004f, edge - 0.1f}}), o, temp_path("edge.vdb"))
+                .active_voxels,
+            0);
+  VoxelizeOptions spill = options_with(VoxelizeMode::spill, Vec3(0.001f));
+  spill.depth = 0.001f;
+  spill.world_from_input = Transform::translate({0, 0, -1e20f});
+  std::ofstream(temp_path("far.hf")) << "1 1\n1 1\n";
+  const std::string far_field = error_of([&] { voxelize_file(temp_path("far.hf"), spill, temp_path("never.vdb")); });
+  EXPECT_TRUE(contains(far_field, "from the origin along z")) << far_field;
+}
+
 TEST(VoxelizeErrors, ModeParameters) {
   const TriangleMesh quad = make_quad({0, 0, 0}, {0.1f, 0, 0}, {0, 0, -0.1f});
   EXPECT_TRUE(contains(error_of([&] {
