@@ -427,18 +427,43 @@ constexpr double kFloatLeafBytes =
     double(sizeof(FloatTree::LeafNodeType) + sizeof(float) * FloatTree::LeafNodeType::SIZE);
 constexpr double kLowerBytes = double(sizeof(LowerNode)), kUpperBytes = double(sizeof(UpperNode));
 
+// Coord's own std::hash keeps 20 bits (OpenVDB's Coord::hash): past a million leaves a set
+// keyed by it degrades to chains.
+struct LeafOriginHash {
+  size_t operator()(const openvdb::Coord& c) const {
+    uint64_t h = uint64_t(uint32_t(c.x())) * 0x9E3779B97F4A7C15ull ^ uint64_t(uint32_t(c.y())) * 0xC2B2AE3D27D4EB4Full ^
+                 uint64_t(uint32_t(c.z())) * 0x165667B19E3779F9ull;
+    h ^= h >> 29;  // the high bits reach the low ones, which pick the bucket
+    return size_t(h);
+  }
+};
+// The leaves seen so far, with a small direct-mapped cache in front: neighbouring pieces of a
+// triangle mark mostly the same leaves, and the cache answers those without the set's probe.
+struct LeafSet {
+  std::unordered_set<openvdb::Coord, LeafOriginHash> set;
+  std::vector<openvdb::Coord> recent = std::vector<openvdb::Coord>(4096, openvdb::Coord::max());
+  void insert(const openvdb::Coord& c) {
+    openvdb::Coord& slot = recent[LeafOriginHash{}(c) & (recent.size() - 1)];
+    if (slot == c) return;
+    slot = c;
+    set.insert(c);
+  }
+  size_t size() const { return set.size(); }
+};
+
 // The leaves (8^3 voxels, keyed by their origin) within `reach` index voxels of the triangle
 // (a, b, c) (index space), into `leaves` until it holds `max_leaves`: the triangle is halved
-// across its longest edge (slivers, a needle's sides, split along their length only) until that
-// edge is at most a leaf or `reach` long; then the leaves of its bounding box grown by `reach`
-// that lie within `reach` of its plane are marked. A superset of the leaves meshToVolume's band
-// touches.
+// across its longest edge (slivers, a needle's sides, split along their length only) until
+// that edge is at most four leaves or `reach` long; then the leaves of the piece's bounding
+// box grown by `reach` that lie within `reach` of its plane are marked (a piece is planar,
+// so its size costs no precision). A superset of the leaves meshToVolume's band touches.
 void collect_band_leaves(const openvdb::Vec3d& a, const openvdb::Vec3d& b, const openvdb::Vec3d& c, double reach,
-                         std::unordered_set<openvdb::Coord>& leaves, size_t max_leaves) {
+                         LeafSet& leaves, size_t max_leaves) {
   if (leaves.size() >= max_leaves) return;
   const double leaf = double(1 << kLeafLog2);
   const double ab = (b - a).lengthSqr(), bc = (c - b).lengthSqr(), ca = (a - c).lengthSqr();
-  if (const double longest = std::max({ab, bc, ca}); longest > std::max(leaf, reach) * std::max(leaf, reach)) {
+  if (const double longest = std::max({ab, bc, ca});
+      longest > std::max(4.0 * leaf, reach) * std::max(4.0 * leaf, reach)) {
     if (ab == longest) {
       collect_band_leaves(a, 0.5 * (a + b), c, reach, leaves, max_leaves);
       collect_band_leaves(0.5 * (a + b), b, c, reach, leaves, max_leaves);
@@ -469,19 +494,22 @@ void collect_band_leaves(const openvdb::Vec3d& a, const openvdb::Vec3d& b, const
       }
 }
 
-// Bytes of mesh_to_fog's trees, counted by node: the leaves the band touches hold meshToVolume's
-// distance (float) and closest triangle (int32, the same size), about as much again in its
-// per-thread voxelization data, and the fog's float (at least `stored_voxels` of them); each of
-// those four trees has the internal nodes over the band's leaves. Counting stops past
-// `limit_bytes` (> 0; the caller refuses then).
-double mesh_tree_bytes(const TriangleMesh& mesh, const VoxelizeOptions& o, const detail::BandWidths& band,
-                       double stored_voxels, double limit_bytes) {
+// Raises `e` to mesh_to_fog's trees counted by node: the leaves the band touches hold
+// meshToVolume's distance (float) and closest triangle (int32, the same size), about as much
+// again in its per-thread voxelization data, and the fog's float (at least e.stored_voxels of
+// them); each of those four trees has the internal nodes over the band's leaves; 25 % over, as
+// the area estimate. Counting stops once the bytes pass e.available_bytes or the leaves 2^31
+// voxels, which check_estimate then refuses.
+void add_tree_nodes(const TriangleMesh& mesh, const VoxelizeOptions& o, const detail::BandWidths& band,
+                    VoxelEstimate& e) {
   const Vec3 h = o.voxel_size;
   const double reach = double(std::max(band.exterior, band.interior)) + 1.0;
-  constexpr double kTrees = 4.0;
-  const double per_leaf = kTrees * kFloatLeafBytes;
-  const size_t max_leaves = limit_bytes > 0 ? size_t(std::min(limit_bytes / per_leaf + 1.0, 1e9)) : size_t(1e9);
-  std::unordered_set<openvdb::Coord> leaves;
+  constexpr double kTrees = 4.0, kOverhead = 1.25;
+  const double per_leaf = kTrees * kFloatLeafBytes, leaf_voxels = double(FloatTree::LeafNodeType::SIZE);
+  double cap = kMaxVoxels / leaf_voxels + 1.0;
+  if (e.available_bytes > 0) cap = std::min(cap, double(e.available_bytes) / (kOverhead * per_leaf) + 1.0);
+  const auto max_leaves = size_t(cap);
+  LeafSet leaves;
   for (int t = 0; t < mesh.triangle_count() && leaves.size() < max_leaves; ++t) {
     std::array<openvdb::Vec3d, 3> v;
     for (int k = 0; k < 3; ++k) {
@@ -490,15 +518,17 @@ double mesh_tree_bytes(const TriangleMesh& mesh, const VoxelizeOptions& o, const
     }
     collect_band_leaves(v[0], v[1], v[2], reach, leaves, max_leaves);
   }
-  std::unordered_set<openvdb::Coord> lower, upper;
-  for (const openvdb::Coord& l : leaves) {
+  std::unordered_set<openvdb::Coord, LeafOriginHash> lower, upper;
+  for (const openvdb::Coord& l : leaves.set) {
     lower.insert(l >> kLowerLog2);
     upper.insert(l >> kUpperLog2);
   }
-  const double band_voxels = double(leaves.size()) * double(FloatTree::LeafNodeType::SIZE);
-  const double fog_beyond_band = std::max(0.0, stored_voxels - band_voxels) * sizeof(float);
-  return double(leaves.size()) * per_leaf + fog_beyond_band +
-         kTrees * (double(lower.size()) * kLowerBytes + double(upper.size()) * kUpperBytes);
+  const double band_leaf_voxels = double(leaves.size()) * leaf_voxels;
+  const double fog_beyond_band = std::max(0.0, e.stored_voxels - band_leaf_voxels) * sizeof(float);
+  const double bytes = double(leaves.size()) * per_leaf + fog_beyond_band +
+                       kTrees * (double(lower.size()) * kLowerBytes + double(upper.size()) * kUpperBytes);
+  e.bytes = std::max(e.bytes, kOverhead * bytes);
+  if (band_leaf_voxels > kMaxVoxels) e.band_voxels = std::max(e.band_voxels, band_leaf_voxels);
 }
 
 // The voxel columns of a height field spill: the layer y0 <= y <= y0 + depth · sample(x, z),
@@ -698,9 +728,7 @@ VoxelizeReport voxelize_mesh(const TriangleMesh& input, const VoxelizeOptions& o
   VoxelEstimate estimate = estimate_voxels(mesh, o, profile);
   check_estimate(estimate, o);  // refuses the hopeless before visiting every triangle
   check_voxel_volume(o);
-  const double limit = estimate.available_bytes > 0 ? double(estimate.available_bytes) : 0.0;
-  estimate.bytes =
-      std::max(estimate.bytes, 1.25 * mesh_tree_bytes(mesh, o, band, estimate.stored_voxels, limit / 1.25));
+  add_tree_nodes(mesh, o, band, estimate);
   check_estimate(estimate, o);
 
   Fog fog = mesh_to_fog(mesh, o, profile);
